@@ -210,3 +210,13 @@ def test_command_line_reports_error_with_location(tmp_path) -> None:
     assert result.returncode == 2
     assert "literate/a.md:3: reference to undefined chunk <<nope>>" in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_names_may_contain_arrows_and_symbols(tmp_path) -> None:
+    doc = chunk("<<src/ident/m.py>>=", "<<R -> I/S/O (m > 0 case)>>") + chunk("<<R -> I/S/O (m > 0 case)>>=", "a = 1")
+    assert code_lines(tangled(tmp_path, {"a.md": doc})["src/ident/m.py"]) == ["a = 1"]
+
+
+def test_malformed_chunk_header_is_an_error_not_a_display(tmp_path) -> None:
+    doc = chunk("<<src/ident/m.py>>=", "a = 1") + "```python .noeval\n# <<broken>\nb = 2\n```\n"
+    assert error_of(tmp_path, {"a.md": doc}).startswith("literate/a.md:5: malformed chunk header")
