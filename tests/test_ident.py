@@ -1,0 +1,175 @@
+"""ident and misfit: exact data are recovered; the reference examples are matched or beaten."""
+from __future__ import annotations
+
+import itertools
+import json
+
+import control
+import numpy as np
+import pytest
+
+from conftest import SHARED
+from ident.identification import ident, misfit
+from ident.representations import make_ss, markov_parameters, random_system, simulate
+
+REFERENCE = SHARED / "reference"
+needs_reference = pytest.mark.skipif(not REFERENCE.is_dir(), reason=f"reference data not found at {REFERENCE}")
+
+
+def trajectory(sys, n_samples: int, rng, x0=None) -> np.ndarray:
+    """w = [u y] of sys for a random input and initial state (zero state if x0 == 0)."""
+    u = rng.standard_normal((n_samples, sys.ninputs))
+    if x0 is None:
+        x0 = rng.standard_normal(sys.nstates)
+    return np.hstack([u, simulate(sys, u, x0)])
+
+
+def relative_markov_error(sysh, sys, count: int = 20) -> float:
+    reference = markov_parameters(sys, count)
+    return float(np.linalg.norm(markov_parameters(sysh, count) - reference) / max(np.linalg.norm(reference), 1e-300))
+
+
+def free_response_error(sysh, sys, n_samples: int = 20) -> float:
+    """For autonomous models: both generate the same output space (compare orthogonal projectors)."""
+    from ident.representations import observability_matrix
+
+    def projector(s):
+        O = observability_matrix(np.asarray(s.A), np.asarray(s.C), n_samples)
+        Q, _ = np.linalg.qr(O)
+        return Q @ Q.T
+
+    return float(np.linalg.norm(projector(sysh) - projector(sys)))
+
+
+EXACT_CASES = [  # (m, p, ell)
+    (1, 1, 1), (1, 1, 3), (2, 1, 2), (1, 2, 2), (2, 2, 1), (0, 1, 2), (0, 2, 2), (2, 1, 0), (1, 3, 1),
+]
+
+
+@pytest.mark.parametrize("m, p, ell", EXACT_CASES, ids=[f"m{m}p{p}l{l}" for m, p, l in EXACT_CASES])
+def test_exact_trajectory_is_recovered(m, p, ell) -> None:
+    rng = np.random.default_rng(100 * m + 10 * p + ell)
+    sys = random_system(m, p, ell, rng)
+    w = trajectory(sys, 60 + 20 * ell * (m + p), rng)
+    sysh, info, wh, xini = ident(w, m, ell)
+    assert info.M / np.sum(w ** 2) < 1e-12, info
+    assert (sysh.ninputs, sysh.noutputs, sysh.nstates) == (m, p, ell * p)
+    if m:
+        assert relative_markov_error(sysh, sys) < 1e-6
+    else:
+        assert free_response_error(sysh, sys) < 1e-6
+    assert np.allclose(wh, w, atol=1e-8 * np.abs(w).max())
+    assert xini.shape == (ell * p, 1)
+    assert np.allclose(simulate(sysh, wh[:, :m], xini[:, 0]), wh[:, m:], atol=1e-7 * np.abs(w).max())
+
+
+def test_exact_two_series_of_different_lengths_zero_initial_conditions_exact_inputs() -> None:
+    rng = np.random.default_rng(7)
+    sys = random_system(2, 2, 2, rng)
+    w = [trajectory(sys, length, rng, x0=np.zeros(4)) for length in (40, 70)]
+    sysh, info, wh, xini = ident(w, 2, 2, exct=[0, 1], wini=0)
+    assert info.M / sum(np.sum(x ** 2) for x in w) < 1e-12
+    assert relative_markov_error(sysh, sys) < 1e-6
+    assert isinstance(wh, list) and [len(x) for x in wh] == [40, 70]
+    for x, xh in zip(w, wh):
+        np.testing.assert_array_equal(xh[:, :2], x[:, :2])  # exact variables are not corrected
+    assert np.abs(xini).max() < 1e-8  # zero initial conditions -> zero initial state
+
+
+def test_three_dimensional_data_come_back_three_dimensional() -> None:
+    rng = np.random.default_rng(3)
+    sys = random_system(1, 1, 2, rng)
+    w = np.stack([trajectory(sys, 50, rng) for _ in range(3)], axis=2)
+    sysh, info, wh, xini = ident(w, 1, 2)
+    assert wh.shape == w.shape and xini.shape == (2, 3)
+    assert info.M / np.sum(w ** 2) < 1e-12
+
+
+def test_given_initial_conditions_are_continued() -> None:
+    rng = np.random.default_rng(11)
+    sys = random_system(1, 1, 2, rng)
+    whole = trajectory(sys, 80, rng)
+    past, w = whole[:2], whole[2:]
+    noisy = w + 0.05 * rng.standard_normal(w.shape)
+    sysh, info, wh, xini = ident(noisy, 1, 2, wini=[past])
+    M_free = ident(noisy, 1, 2)[1].M
+    assert info.M >= M_free - 1e-9  # fixing the past can only cost
+    M_check, wh_check, _ = misfit(noisy, sysh, wini=[past])
+    assert M_check == pytest.approx(info.M, rel=1e-8)
+
+
+def test_misfit_of_identified_model_equals_info_and_is_realisation_independent() -> None:
+    rng = np.random.default_rng(5)
+    sys = random_system(1, 2, 2, rng)
+    w = trajectory(sys, 120, rng) + 0.1 * rng.standard_normal((120, 3))
+    sysh, info, wh, xini = ident(w, 1, 2)
+    M, wh2, xini2 = misfit(w, sysh)
+    assert M == pytest.approx(info.M, rel=1e-8)
+    np.testing.assert_allclose(wh2, wh, atol=1e-8)
+    S = rng.standard_normal((4, 4)) + 3 * np.eye(4)
+    transformed = control.similarity_transform(sysh, S) if sysh.ninputs else sysh
+    assert misfit(w, transformed)[0] == pytest.approx(M, rel=1e-8)
+
+
+def test_noisy_misfit_of_identified_model_not_above_true_model() -> None:
+    rng = np.random.default_rng(9)
+    sys = random_system(1, 1, 3, rng)
+    w = trajectory(sys, 200, rng) + 0.2 * rng.standard_normal((200, 2))
+    sysh, info, _, _ = ident(w, 1, 3)
+    assert info.converged
+    assert info.M <= misfit(w, sys)[0] + 1e-9
+
+
+# --- the reference examples: equal to or below the original software's misfit ------------------
+
+@needs_reference
+def test_mass_spring_chain_exact_data() -> None:
+    w = np.loadtxt(REFERENCE / "msd_uy.txt")
+    reference = json.loads((REFERENCE / "msd_results.json").read_text())
+    sysh, info, wh, xini = ident(w, 1, 14)
+    assert info.M / np.sum(w ** 2) < 1e-12  # reference: 6.66e-14 / 5.7e6, roundoff either way
+    sampled = np.linalg.eigvals(np.array(reference["true_d"]["A"]))
+    errors = [np.min(np.abs(sampled - e)) for e in np.linalg.eigvals(sysh.A)]
+    assert len(errors) == 14 and max(errors) < 5e-3, sorted(errors)[-3:]
+
+
+@needs_reference
+def test_two_trajectories_zero_initial_conditions() -> None:
+    data = json.loads((REFERENCE / "multtraj_data.json").read_text())
+    w = [np.array(data["w_1"]), np.array(data["w_2"])]
+    w0 = [np.array(data["w0_1"]), np.array(data["w0_2"])]
+    sys0 = make_ss(*(np.array(data["sys0"][k]) for k in "ABCD"))
+    sysh, info, wh, xini = ident(w, 1, 3, wini=0)
+    assert info.M <= data["info_M"] * (1 + 1e-6)
+    assert misfit(w, sys0, wini=0)[0] == pytest.approx(data["misfit_sys0"], rel=1e-9)
+    assert misfit(w, sysh, wini=0)[0] == pytest.approx(info.M, rel=1e-8)
+    errors = [np.linalg.norm(a - b) / np.linalg.norm(a) for a, b in zip(w0, wh)]
+    np.testing.assert_allclose(errors, data["relerr_w0_wh"], rtol=1e-3)
+
+
+@needs_reference
+def test_invariance_to_the_ordering_of_the_variables() -> None:
+    data = json.loads((REFERENCE / "invariance_2x2.json").read_text())
+    w = np.array(data["w"])
+    reference_M = data["runs"][0]["M"]
+    base = None
+    for perm in itertools.permutations(range(4)):
+        sysh, info, wh, _ = ident(w[:, list(perm)], 2, 2)
+        assert info.M <= reference_M * (1 + 1e-6), (perm, info.M)
+        if base is None:
+            base = wh
+        assert np.linalg.norm(wh - base[:, list(perm)]) < 1e-6 * np.linalg.norm(w)
+
+
+@needs_reference
+def test_distill2_step_responses() -> None:
+    results = json.loads((REFERENCE / "step_results.json").read_text())["percol"]
+    y = np.array(results["y"])  # 30 x 6: outputs 1, 2 of the step in input 1, then input 2, 3
+    w = np.zeros((30, 5, 3))
+    for k in range(3):
+        w[:, k, k] = 1.0
+        w[:, 3:, k] = y[:, 2 * k:2 * k + 2]
+    sysh, info, wh, xini = ident(w, 3, 3, exct=[0, 1, 2], wini=0)
+    assert info.M <= results["info_M"] * (1 + 1e-6)
+    fit = 100 * (1 - np.linalg.norm(wh[:, 3:, :] - w[:, 3:, :]) / np.linalg.norm(w[:, 3:, :]))
+    assert fit >= results["fit_percent"] - 1e-6

@@ -1,0 +1,354 @@
+"""Tests of the structure specification and the SLRA solver (ident.structure, ident.slra).
+
+The derivatives are checked against finite differences of dense formulas that do not share code
+with the banded implementation. Data from the original implementation's reference results are read
+from ``../shared`` beside the project (never copied into the repository); tests that need them are
+skipped when that folder is missing.
+"""
+import importlib
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ident.slra import InfeasibleKernelError, SLRAWarning, initial_kernel, kernel_misfit, slra
+from ident.structure import Structure, series_to_parameters
+
+# the module itself: the package exports the function slra under the same name as the module
+solver = importlib.import_module("ident.slra")
+
+SHARED = Path(__file__).resolve().parents[2] / "shared"
+DAISY = SHARED / "daisy"
+REFERENCE = SHARED / "reference"
+
+
+def reference(name):
+    """A JSON file of the reference results, or a skip when the shared folder is missing."""
+    path = REFERENCE / name
+    if not path.is_file():
+        pytest.skip(f"reference data {path} not found (the shared folder beside the project is missing)")
+    return json.loads(path.read_text())
+
+
+def daisy(name):
+    """Identification part of a DAISY set as in Table 1: (w, m, p, ell), or a skip."""
+    if not (DAISY / "datasets.toml").is_file():
+        pytest.skip(f"DAISY data not found in {DAISY} (the shared folder beside the project is missing)")
+    meta = tomllib.loads((DAISY / "datasets.toml").read_text())[name]
+    data = np.loadtxt(DAISY / meta["file"])
+    columns = [slice(*map(int, meta[key].split(":"))) for key in ("inputs", "outputs")]
+    w = np.hstack([data[:, c] for c in columns])
+    w = w - w.mean(axis=0)
+    return w[: math.ceil(0.7 * len(w))], meta["m"], meta["p"], meta["ell"]
+
+
+# --------------------------------------------------------------------------------------- helpers
+def general_structure(seed=1, weights=True):
+    """Unequal depths, 2 series of different lengths, a random row permutation, random and inf weights."""
+    rng = np.random.default_rng(seed)
+    structure = Structure((3, 2, 3), (12, 9), perm=tuple(rng.permutation(8)))
+    w = None
+    if weights:
+        w = np.exp(rng.standard_normal(structure.n_params))
+        w[rng.random(structure.n_params) < 0.1] = np.inf
+    return Structure(structure.depths, structure.n_cols, structure.perm, w), rng
+
+
+def dense_quantities(structure, p, R):
+    """Dense G, V, Gamma, r, y (independent of the banded implementation)."""
+    n = structure.n_params
+    G = np.array([(R @ structure.hankel(e)).T.ravel() for e in np.eye(n)]).T
+    V = np.diag(structure.inverse_weights)
+    Gamma = G @ V @ G.T
+    r = G @ p
+    return G, V, Gamma, r, np.linalg.solve(Gamma, r)
+
+
+def simulate(rng, m, p, n, T):
+    """Trajectory [u y] of a random stable state-space system."""
+    A = rng.standard_normal((n, n))
+    A *= 0.8 / max(abs(np.linalg.eigvals(A)))
+    B, C, D = (rng.standard_normal(s) for s in ((n, m), (p, n), (p, m)))
+    u = rng.standard_normal((T, m))
+    x = rng.standard_normal(n)
+    y = np.empty((T, p))
+    for t in range(T):
+        y[t] = C @ x + D @ u[t]
+        x = A @ x + B @ u[t]
+    return np.hstack([u, y])
+
+
+def central_differences(fun, x, h=1e-6):
+    return np.array([(fun(x + h * e) - fun(x - h * e)) / (2 * h) for e in np.eye(len(x))]).T
+
+
+def at_random_kernel(weights=True):
+    """A problem with a general structure, a random kernel in its chart, and the chart coordinates."""
+    structure, rng = general_structure(weights=weights)
+    p = rng.standard_normal(structure.n_params)
+    R = rng.standard_normal((3, structure.n_rows))
+    chart = solver._Chart.from_kernel(R)
+    return structure, p, chart, chart.coordinates(R), solver._Problem(p, structure)
+
+
+# ------------------------------------------------------------------------------------- structure
+def test_time_major_layout():
+    structure = Structure.time_major(2, 1, [3])
+    w = np.arange(8.0).reshape(4, 2)  # T = 4 samples, q = 2
+    p = structure.params_from_series([w])
+    assert np.array_equal(p, [0, 2, 4, 6, 1, 3, 5, 7])
+    assert np.array_equal(p, series_to_parameters([w]))
+    # rows: (lag 0 var 0, lag 0 var 1, lag 1 var 0, lag 1 var 1)
+    assert np.array_equal(structure.hankel(p), [[0, 2, 4], [1, 3, 5], [2, 4, 6], [3, 5, 7]])
+    assert np.array_equal(structure.series_from_params(p)[0], w)
+
+
+def test_structure_validation():
+    with pytest.raises(ValueError):
+        Structure((2, 2), (5,), perm=(0, 1, 2, 2))
+    with pytest.raises(ValueError):
+        Structure((2,), (5,), weights=-np.ones(6))
+    with pytest.raises(ValueError):
+        Structure((2,), (5,), weights=np.ones(5))
+    with pytest.raises(ValueError):
+        Structure.time_major(2, 1, [3]).params_from_series([np.zeros((5, 2))])
+    assert Structure((2,), (5,), weights=np.inf).fixed.all()
+
+
+def test_unequal_depths_and_several_series_layout():
+    structure, _ = general_structure(weights=False)
+    p = np.arange(structure.n_params, dtype=float)
+    samples = structure.split(p)
+    assert [len(s) for s in samples[0]] == [14, 13, 14] and [len(s) for s in samples[1]] == [11, 10, 11]
+    H = structure.hankel(p)
+    assert H.shape == (8, 21)
+    # column 0 of series 1, variable 1 at lag 1 (variable-major row 3 + 1)
+    assert H[list(structure.perm).index(4), 12] == samples[1][1][1]
+
+
+# -------------------------------------------------------------------------------- inner problem
+def test_kernel_misfit_matches_dense_formulas():
+    structure, rng = general_structure()
+    p = rng.standard_normal(structure.n_params)
+    R = rng.standard_normal((3, structure.n_rows))
+    G, V, Gamma, r, y = dense_quantities(structure, p, R)
+    M, p_hat = kernel_misfit(p, structure, R)
+    assert M == pytest.approx(r @ y, rel=1e-11)
+    assert np.allclose(p_hat, p - V @ G.T @ y, atol=1e-10)
+    assert np.abs(R @ structure.hankel(p_hat)).max() < 1e-9
+    assert np.array_equal(p_hat[structure.fixed], p[structure.fixed])
+    free = ~structure.fixed
+    assert M == pytest.approx(np.sum(structure.weights[free] * (p - p_hat)[free] ** 2), rel=1e-10)
+
+
+def test_gamma_band_matches_dense_gamma():
+    structure, rng = general_structure()
+    R = rng.standard_normal((3, structure.n_rows))
+    _, _, Gamma, _, _ = dense_quantities(structure, np.zeros(structure.n_params), R)
+    band = solver._gamma_band(solver._kernel_blocks(R, structure), structure)
+    n = Gamma.shape[0]
+    for diagonal in range(band.shape[0]):
+        assert np.allclose(band[diagonal, : n - diagonal], np.diag(Gamma, -diagonal), atol=1e-12)
+    assert np.abs(np.tril(Gamma, -band.shape[0])).max() == 0.0
+
+
+def test_infeasible_kernel_is_reported():
+    # variable 0 exact, R acting only on variable 0: Gamma = 0
+    structure = Structure.time_major(2, 1, [20])
+    weights = np.ones(structure.n_params)
+    weights[:21] = np.inf
+    structure = Structure(structure.depths, structure.n_cols, structure.perm, weights)
+    R = np.array([[1.0, 0, 2.0, 0]])  # columns: (lag 0 var 0, lag 0 var 1, lag 1 var 0, lag 1 var 1)
+    with pytest.raises(InfeasibleKernelError):
+        kernel_misfit(np.ones(structure.n_params), structure, R)
+
+
+# ---------------------------------------------------------------------------------- derivatives
+@pytest.mark.parametrize("weights", [True, False])
+def test_gradient_matches_central_differences(weights):
+    structure, p, chart, x, problem = at_random_kernel(weights)
+    state = problem.evaluate(chart.kernel(x))
+    numerical = central_differences(lambda z: problem.evaluate(chart.kernel(z)).cost, x)
+    for normal_equations in (problem.normal_equations_projection, problem.normal_equations_true):
+        _, half_gradient = normal_equations(state, chart.free_columns)
+        assert np.allclose(2 * half_gradient, numerical, rtol=1e-6, atol=1e-6 * np.abs(numerical).max())
+
+
+def test_true_jacobian_of_the_whitened_residual():
+    structure, p, chart, x, problem = at_random_kernel()
+
+    def eps(z):
+        _, _, Gamma, r, _ = dense_quantities(structure, p, chart.kernel(z))
+        return np.linalg.solve(np.linalg.cholesky(Gamma), r)
+
+    J = central_differences(eps, x)
+    H, half_gradient = problem.normal_equations_true(problem.evaluate(chart.kernel(x)), chart.free_columns)
+    assert np.abs(J.T @ J - H).max() < 1e-6 * np.abs(H).max()
+    assert np.abs(J.T @ eps(x) - half_gradient).max() < 1e-6 * np.abs(half_gradient).max()
+
+
+def test_projection_jacobian_of_the_correction_residual():
+    structure, p, chart, x, problem = at_random_kernel()
+
+    def correction(z):
+        G, V, _, _, y = dense_quantities(structure, p, chart.kernel(z))
+        return np.sqrt(np.diag(V)) * (G.T @ y)
+
+    J = central_differences(correction, x)
+    H, half_gradient = problem.normal_equations_projection(problem.evaluate(chart.kernel(x)),
+                                                           chart.free_columns)
+    assert np.abs(J.T @ J - H).max() < 1e-6 * np.abs(H).max()
+    assert np.abs(J.T @ correction(x) - half_gradient).max() < 1e-6 * np.abs(half_gradient).max()
+
+
+def test_stationary_factor_and_chunking_agree_with_the_full_recursion(monkeypatch):
+    rng = np.random.default_rng(2)
+    structure = Structure.time_major(4, 2, [400, 300])
+    weights = np.ones(structure.n_params)
+    for samples_j in structure.split(weights):
+        samples_j[0][:2] = np.inf  # fixed initial samples of variable 0
+    structure = Structure(structure.depths, structure.n_cols, structure.perm, weights)
+    p = rng.standard_normal(structure.n_params)
+    R = rng.standard_normal((2, structure.n_rows))
+    chart = solver._Chart.from_kernel(R)
+    problem = solver._Problem(p, structure)
+    state = problem.evaluate(R)
+    H1, g1 = problem.normal_equations_true(state, chart.free_columns)
+    Hp1, gp1 = problem.normal_equations_projection(state, chart.free_columns)
+    monkeypatch.setattr(solver, "_STAT_TOL", -1.0)  # never stationary: the full recursion
+    monkeypatch.setattr(solver, "_CHUNK_ELEMS", 100)  # many small chunks
+    H2, g2 = problem.normal_equations_true(state, chart.free_columns)
+    Hp2, gp2 = problem.normal_equations_projection(state, chart.free_columns)
+    assert np.abs(H1 - H2).max() < 1e-11 * np.abs(H2).max()
+    assert np.abs(Hp1 - Hp2).max() < 1e-11 * np.abs(Hp2).max()
+    assert np.allclose(g1, g2) and np.allclose(gp1, gp2)
+
+
+def test_chunked_forward_substitution_matches_one_solve():
+    structure, rng = general_structure()
+    R = rng.standard_normal((3, structure.n_rows))
+    factor = solver._cholesky(solver._gamma_band(solver._kernel_blocks(R, structure), structure))
+    rhs = rng.standard_normal((factor.shape[1], 4))
+    whole = solver._triangular_solve(factor, rhs)
+    forward = solver._ForwardSolver(factor)
+    pieces = [forward.solve(rhs[a:b]) for a, b in [(0, 5), (5, 7), (7, 40), (40, factor.shape[1])]]
+    assert np.allclose(np.vstack(pieces), whole, rtol=1e-10, atol=1e-12)
+
+
+# --------------------------------------------------------------------------------------- solver
+def test_exact_data_give_zero_misfit():
+    rng = np.random.default_rng(3)
+    w = simulate(rng, 2, 2, 4, 200)
+    structure = Structure.time_major(4, 2, [198])
+    p = structure.params_from_series([w])
+    result = slra(p, structure, 3 * 4 - 2)
+    assert result.misfit / (p @ p) < 1e-12
+    assert result.converged
+
+
+@pytest.mark.parametrize("jacobian", ["projection", "true"])
+def test_invariance_to_the_ordering_of_the_variables(jacobian):
+    w = np.array(reference("invariance_2x2.json")["w"])
+    structure = Structure.time_major(4, 2, [len(w) - 2])
+    misfits = []
+    for order in [(0, 1, 2, 3), (3, 2, 1, 0), (1, 3, 0, 2), (2, 0, 3, 1)]:
+        result = slra(structure.params_from_series([w[:, order]]), structure, 10, jacobian=jacobian)
+        misfits.append(result.misfit)
+        assert result.iterations <= 50
+    assert max(misfits) <= 2.1498205 * (1 + 1e-7)
+    assert max(misfits) - min(misfits) < 1e-7
+
+
+def test_two_series_with_fixed_initial_conditions():
+    data = reference("multtraj_data.json")
+    ell, q = 3, 2
+    series = [np.vstack([np.zeros((ell, q)), np.array(data[name])]) for name in ("w_1", "w_2")]
+    structure = Structure.time_major(q, ell, [len(w) - ell for w in series])
+    weights = np.ones(structure.n_params)
+    for samples_j in structure.split(weights):
+        for samples_ji in samples_j:
+            samples_ji[:ell] = np.inf
+    structure = Structure(structure.depths, structure.n_cols, structure.perm, weights)
+    p = structure.params_from_series(series)
+    result = slra(p, structure, (ell + 1) * q - 1)
+    assert result.misfit <= data["info_M"] * (1 + 1e-7)
+    assert result.misfit == pytest.approx(data["info_M"], rel=1e-6)
+    assert np.array_equal(result.p_hat[structure.fixed], p[structure.fixed])
+    assert np.abs(result.R @ structure.hankel(result.p_hat)).max() < 1e-8
+
+
+def test_exact_variables_output_error():
+    rng = np.random.default_rng(4)
+    w = simulate(rng, 1, 1, 2, 150)
+    w[:, 1] += 0.05 * rng.standard_normal(150)
+    structure = Structure.time_major(2, 2, [148])
+    weights = np.ones(structure.n_params)
+    weights[:150] = np.inf  # the input is exact
+    structure = Structure(structure.depths, structure.n_cols, structure.perm, weights)
+    p = structure.params_from_series([w])
+    result = slra(p, structure, 5)
+    assert result.converged
+    assert np.array_equal(result.p_hat[:150], p[:150])
+    M, _ = kernel_misfit(p, structure, result.R)
+    assert M == pytest.approx(result.misfit, rel=1e-10)
+
+
+def test_fallback_start_when_the_default_is_infeasible():
+    # variable 1 identically zero: the unstructured kernel makes Gamma singular
+    rng = np.random.default_rng(5)
+    w = np.column_stack([rng.standard_normal(60), np.zeros(60), rng.standard_normal(60)])
+    structure = Structure.time_major(3, 1, [59])
+    p = structure.params_from_series([w])
+    with pytest.raises(InfeasibleKernelError):
+        kernel_misfit(p, structure, initial_kernel(p, structure, 4))
+    result = slra(p, structure, 4)
+    assert np.isfinite(result.misfit)
+    assert "fall-back" in result.message
+
+
+def test_given_initial_kernel_is_checked():
+    structure = Structure.time_major(2, 1, [10])
+    p = np.ones(structure.n_params)
+    with pytest.raises(ValueError):
+        slra(p, structure, 3, R0=np.ones((2, 4)))
+    with pytest.raises(InfeasibleKernelError):
+        slra(p, structure, 2, R0=np.ones((2, 4)))  # rank deficient
+    with pytest.raises(ValueError):
+        slra(p, structure, 3, jacobian="finite differences")
+
+
+def test_nonconvergence_is_reported():
+    w = np.array(reference("invariance_2x2.json")["w"])
+    structure = Structure.time_major(4, 2, [len(w) - 2])
+    with pytest.warns(SLRAWarning):
+        result = slra(structure.params_from_series([w]), structure, 10, maxiter=1)
+    assert not result.converged and result.iterations == 1
+
+
+def test_deterministic():
+    w = np.array(reference("invariance_2x2.json")["w"])
+    structure = Structure.time_major(4, 2, [len(w) - 2])
+    p = structure.params_from_series([w])
+    a, b = slra(p, structure, 10), slra(p, structure, 10)
+    assert a.misfit == b.misfit and np.array_equal(a.R, b.R)
+
+
+def test_returned_kernel_is_in_its_chart():
+    w = np.array(reference("invariance_2x2.json")["w"])
+    structure = Structure.time_major(4, 2, [len(w) - 2])
+    result = slra(structure.params_from_series([w]), structure, 10)
+    assert np.array_equal(result.R[:, result.chart], -np.eye(2))
+    assert result.M == result.misfit == result.history[-1]
+    assert np.abs(result.R @ structure.hankel(result.p_hat)).max() < 1e-8 * np.abs(result.p_hat).max()
+
+
+@pytest.mark.parametrize("name, reference_misfit", [("erie", 5.3849193), ("robot_arm", 1.323095e-2)])
+def test_daisy_misfit_reaches_the_reference(name, reference_misfit):
+    w, m, p_out, ell = daisy(name)
+    structure = Structure.time_major(w.shape[1], ell, [len(w) - ell])
+    result = slra(structure.params_from_series([w]), structure, (ell + 1) * w.shape[1] - p_out)
+    assert result.converged and result.iterations <= 50
+    assert result.misfit <= reference_misfit * (1 + 1e-7)
