@@ -173,3 +173,53 @@ def test_distill2_step_responses() -> None:
     assert info.M <= results["info_M"] * (1 + 1e-6)
     fit = 100 * (1 - np.linalg.norm(wh[:, 3:, :] - w[:, 3:, :]) / np.linalg.norm(w[:, 3:, :]))
     assert fit >= results["fit_percent"] - 1e-6
+
+
+# --- infeasible problems get clear errors -------------------------------------------------------
+
+def test_too_short_for_the_model_class_states_the_minimum() -> None:
+    w = np.random.default_rng(0).standard_normal((8, 3))
+    with pytest.raises(ValueError, match=r"too short for the model class m = 1, ell = 2.*give at least \d+ more"):
+        ident(w, 1, 2)
+
+
+def test_series_shorter_than_the_lag() -> None:
+    rng = np.random.default_rng(0)
+    with pytest.raises(ValueError, match="series 1 of w has T = 2 samples; a model of lag ell = 3"):
+        ident([rng.standard_normal((60, 2)), rng.standard_normal((2, 2))], 1, 3)
+
+
+def test_all_variables_exact_leaves_nothing_to_correct() -> None:
+    w = np.random.default_rng(0).standard_normal((50, 2))
+    with pytest.raises(ValueError, match="exct marks all q = 2 variables exact"):
+        ident(w, 1, 1, exct=[0, 1])
+
+
+def test_initial_approximation_of_the_wrong_class() -> None:
+    rng = np.random.default_rng(1)
+    w = rng.standard_normal((50, 3))
+    with pytest.raises(ValueError, match="sys0 must have m = 1 inputs, p = 2 outputs and order ell\\*p = 4"):
+        ident(w, 1, 2, sys0=random_system(1, 2, 1, rng))
+    with pytest.raises(ValueError, match="sys0 as a kernel parameter R must be a finite p x"):
+        ident(w, 1, 2, sys0=np.ones((2, 5)))
+
+
+def test_method_true_jacobian_reaches_the_same_misfit() -> None:
+    rng = np.random.default_rng(4)
+    sys = random_system(1, 2, 1, rng)
+    w = trajectory(sys, 150, rng) + 0.1 * rng.standard_normal((150, 3))
+    M_projection = ident(w, 1, 1)[1].M
+    M_true = ident(w, 1, 1, method="true")[1].M
+    assert M_true == pytest.approx(M_projection, rel=1e-5)
+    with pytest.raises(ValueError, match="method must be"):
+        ident(w, 1, 1, method="newton")
+
+
+def test_nonconvergence_is_reported_and_warned() -> None:
+    from ident.slra import SLRAWarning
+    rng = np.random.default_rng(9)
+    sys = random_system(1, 1, 3, rng)
+    w = trajectory(sys, 200, rng) + 0.3 * rng.standard_normal((200, 2))
+    with pytest.warns(SLRAWarning):
+        _, info, _, _ = ident(w, 1, 3, maxiter=1)
+    assert not info.converged and info.iter == 1 and info.message
