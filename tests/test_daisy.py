@@ -1,0 +1,301 @@
+"""ident.daisy: the manifest, the loaders, where the files come from, the download (against a local
+HTTP server, never the internet) and a smoke test of the Section 4 runner."""
+from __future__ import annotations
+
+import contextlib
+import csv
+import dataclasses
+import functools
+import gzip
+import http.server
+import io
+import json
+import math
+import shutil
+import socket
+import sys
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ident import daisy
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "daisy"
+XDG_ONLY = pytest.mark.skipif(sys.platform in ("win32", "darwin"), reason="the XDG cache convention is for Linux/Unix")
+
+
+@pytest.fixture
+def shared() -> Path:
+    if not (SHARED / "datasets.toml").is_file():
+        pytest.skip(f"the DAISY files are not in {SHARED} (the project's shared folder beside the repository)")
+    return SHARED
+
+
+@pytest.fixture
+def no_environment(monkeypatch, tmp_path):
+    """No IDENT_DAISY_* variables, and a private cache directory."""
+    monkeypatch.delenv(daisy.DIRECTORY_VARIABLE, raising=False)
+    monkeypatch.delenv(daisy.URL_VARIABLE, raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg-cache"))
+    return tmp_path
+
+
+# --- the manifest ------------------------------------------------------------------------------------
+
+def test_manifest_equals_the_toml_file(shared):
+    tomllib = pytest.importorskip("tomllib")
+    manifest = tomllib.loads((shared / "datasets.toml").read_text(encoding="utf-8"))
+    assert list(manifest) == list(daisy.MANIFEST)
+    for name, entry in manifest.items():
+        ours = dataclasses.asdict(daisy.MANIFEST[name])
+        for key, value in entry.items():
+            if key in ("inputs", "outputs", "step_responses"):
+                value = tuple(int(x) for x in value.split(":"))
+            assert ours[key] == value, (name, key)
+        for key, value in ours.items():
+            if key not in entry and key not in ("name", "note"):
+                assert value is None, (name, key)
+
+
+def test_table1_lists_the_17_sets_in_order():
+    sets = daisy.table1()
+    assert [d.table for d in sets] == list(range(1, 18))
+    assert sets[0].name == "erie" and sets[-1].name == "steamgen"
+    assert len(daisy.datasets()) == 18 and daisy.datasets()[-1].name == "distill2"
+
+
+def test_unknown_data_set_names_the_known_ones():
+    with pytest.raises(ValueError, match="unknown DAISY data set 'nope'.*robot_arm"):
+        daisy.dataset("nope")
+    with pytest.raises(TypeError, match="name must be"):
+        daisy.dataset(3)
+
+
+# --- loading -----------------------------------------------------------------------------------------
+
+def test_every_table1_set_loads_with_its_shape(shared):
+    for d in daisy.table1():
+        u, y = daisy.load(d.name, shared, download_missing=False)
+        assert u.shape == (d.T, d.m) and y.shape == (d.T, d.p), d.name
+        assert np.all(np.isfinite(u)) and np.all(np.isfinite(y))
+
+
+def test_load_picks_the_columns_of_the_manifest(shared):
+    table = np.loadtxt(shared / "erie.dat")
+    u, y = daisy.load("erie", shared)
+    assert np.array_equal(u, table[:, 1:6]) and np.array_equal(y, table[:, 21:23])
+
+
+def test_step_responses_of_distill2(shared):
+    u, y = daisy.load_step_responses("distill2", shared)
+    table = np.loadtxt(shared / "distill2.dat")
+    assert u.shape == (251, 3, 3) and y.shape == (251, 2, 3)
+    for i in range(3):
+        assert np.array_equal(y[:, :, i], table[:, 2 * i + 1: 2 * i + 3])
+        assert np.all(u[:, i, i] == 1) and np.all(np.delete(u[:, :, i], i, axis=1) == 0)
+    w = np.concatenate([u, y], axis=1)
+    assert w.shape == (251, 5, 3)  # T x q x N, the form ident takes
+
+
+def test_loaders_refuse_the_other_kind_of_set(shared):
+    with pytest.raises(ValueError, match="load_step_responses"):
+        daisy.load("distill2", shared)
+    with pytest.raises(ValueError, match="no step responses"):
+        daisy.load_step_responses("erie", shared)
+
+
+# --- where the files come from -----------------------------------------------------------------------
+
+@XDG_ONLY
+def test_directory_precedence(no_environment, monkeypatch, tmp_path):
+    assert daisy.data_directory() == tmp_path / "xdg-cache" / "ident" / "daisy"
+    monkeypatch.setenv(daisy.DIRECTORY_VARIABLE, str(tmp_path / "from-env"))
+    assert daisy.data_directory() == tmp_path / "from-env"
+    assert daisy.data_directory(tmp_path / "given") == tmp_path / "given"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    monkeypatch.delenv(daisy.DIRECTORY_VARIABLE)
+    assert daisy.data_directory() == Path.home() / ".cache" / "ident" / "daisy"
+
+
+def test_url_precedence(no_environment, monkeypatch):
+    assert daisy.base_url() == daisy.DEFAULT_URL
+    monkeypatch.setenv(daisy.URL_VARIABLE, "http://mirror.example/daisy")
+    assert daisy.base_url() == "http://mirror.example/daisy/"
+    assert daisy.base_url("http://given/") == "http://given/"
+
+
+def test_load_reads_the_directory_of_the_environment_variable(shared, no_environment, monkeypatch):
+    monkeypatch.setenv(daisy.DIRECTORY_VARIABLE, str(shared))
+    u, y = daisy.load("robot_arm", download_missing=False)
+    assert u.shape == (1024, 1)
+
+
+def test_a_modified_local_file_is_refused(shared, no_environment, tmp_path):
+    folder = tmp_path / "data"
+    folder.mkdir()
+    (folder / "erie.dat").write_bytes((shared / "erie.dat").read_bytes() + b"\n1 2 3\n")
+    with pytest.raises(daisy.ChecksumError, match="erie.dat.*IDENT_DAISY_DIR"):
+        daisy.load("erie", folder)
+
+
+def test_a_missing_file_without_download_says_what_to_do(no_environment, tmp_path):
+    with pytest.raises(daisy.DataNotFoundError, match="erie.dat is not in .*DAISY database.*IDENT_DAISY_DIR"):
+        daisy.data_file("erie", tmp_path / "empty", download_missing=False)
+
+
+# --- the download, against a local server -------------------------------------------------------------
+
+class _QuietHandler(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, *args):
+        pass
+
+
+@contextlib.contextmanager
+def _serving(root: Path):
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(_QuietHandler, directory=str(root)))
+    server.timeout = 5
+    thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    try:
+        yield f"http://127.0.0.1:{server.server_address[1]}/"
+    finally:
+        server.shutdown()
+        server.server_close()
+        thread.join(timeout=5)
+
+
+def _publish(root: Path, name: str, content: bytes) -> None:
+    """Put `content` where the manifest's path of `name` points, gzip-compressed like DAISY's server."""
+    target = root / daisy.dataset(name).path
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_bytes(gzip.compress(content))
+
+
+@pytest.fixture
+def server(shared, tmp_path):
+    root = tmp_path / "server"
+    _publish(root, "erie", (shared / "erie.dat").read_bytes())
+    _publish(root, "robot_arm", (shared / "robot_arm.dat").read_bytes()[:-200])  # corrupted: truncated
+    with _serving(root) as url:
+        yield url
+
+
+def _leftovers(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir()) if folder.exists() else []
+
+
+def test_download_of_a_good_file(server, shared, no_environment, tmp_path):
+    cache = tmp_path / "cache"
+    path = daisy.data_file("erie", cache, url=server)
+    assert path == cache / "erie.dat"
+    assert path.read_bytes() == (shared / "erie.dat").read_bytes()
+    assert _leftovers(cache) == ["erie.dat"]  # no temporary file left
+    u, y = daisy.load("erie", cache, url="http://127.0.0.1:9/never-used/")  # now cached: no download
+    assert u.shape == (57, 5)
+
+
+@XDG_ONLY
+def test_download_uses_the_url_variable_and_the_default_cache(server, no_environment, monkeypatch, tmp_path):
+    monkeypatch.setenv(daisy.URL_VARIABLE, server)
+    path = daisy.data_file("erie")
+    assert path == tmp_path / "xdg-cache" / "ident" / "daisy" / "erie.dat" and path.is_file()
+
+
+def test_download_of_a_corrupted_file_leaves_nothing(server, no_environment, tmp_path):
+    cache = tmp_path / "cache"
+    with pytest.raises(daisy.ChecksumError, match="downloaded from .*robot_arm.dat.gz.*IDENT_DAISY_DIR"):
+        daisy.data_file("robot_arm", cache, url=server)
+    assert _leftovers(cache) == []
+
+
+def test_download_of_a_missing_file_leaves_nothing(server, no_environment, tmp_path):
+    cache = tmp_path / "cache"
+    with pytest.raises(daisy.DownloadError, match="could not download .*flutter.dat.gz: HTTP 404.*IDENT_DAISY_DIR"):
+        daisy.data_file("flutter", cache, url=server)
+    assert _leftovers(cache) == []
+
+
+def test_download_from_a_server_that_is_down(no_environment, tmp_path):
+    with socket.socket() as probe:  # a port that was free a moment ago and is closed now
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    cache = tmp_path / "cache"
+    with pytest.raises(daisy.DownloadError, match=f"could not download http://127.0.0.1:{port}/.*IDENT_DAISY_DIR"):
+        daisy.download("erie", cache, url=f"http://127.0.0.1:{port}/", timeout=5)
+    assert _leftovers(cache) == []
+
+
+def test_an_interrupted_download_leaves_nothing(server, no_environment, monkeypatch, tmp_path):
+    def failing_replace(source, target):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(daisy.os, "replace", failing_replace)
+    cache = tmp_path / "cache"
+    with pytest.raises(OSError, match="disk full"):
+        daisy.data_file("erie", cache, url=server)
+    assert _leftovers(cache) == []
+
+
+def test_an_uncompressed_mirror_works_too(shared, no_environment, tmp_path):
+    root = tmp_path / "plain"
+    target = root / daisy.dataset("erie").path
+    target.parent.mkdir(parents=True)
+    shutil.copy(shared / "erie.dat", target)  # served as is, without gzip
+    with _serving(root) as url:
+        assert daisy.data_file("erie", tmp_path / "cache", url=url).is_file()
+
+
+# --- the runner ----------------------------------------------------------------------------------------
+
+def test_split_centred():
+    u = np.arange(10.0)[:, None]
+    y = 2 * np.arange(10.0)[:, None] + 5
+    w_identification, w_validation = daisy.split_centred(u, y)
+    assert len(w_identification) == math.ceil(0.7 * 10) == 7 and len(w_validation) == 3
+    assert np.allclose(np.vstack([w_identification, w_validation]).mean(axis=0), 0)
+
+
+def test_least_squares_kernel_recovers_an_exact_arx_system():
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(100)
+    y = np.zeros(100)
+    for t in range(98):
+        y[t + 2] = 1.2 * y[t + 1] - 0.5 * y[t] + 0.7 * u[t + 1] + 0.2 * u[t]
+    R = daisy.least_squares_kernel(np.column_stack([u, y]), 1, 2)
+    assert np.allclose(R, [[0.2, -0.5, 0.7, 1.2, 0.0, -1.0]], atol=1e-10)
+
+
+def test_runner_on_two_small_sets(shared, tmp_path):
+    progress = io.StringIO()
+    results = daisy.run_benchmark(["erie", "robot_arm"], directory=shared, download_missing=False,
+                                  progress=progress)
+    assert [r.name for r in results] == ["erie", "robot_arm"]
+    assert "2/2 robot_arm" in progress.getvalue()
+    erie, robot_arm = results
+    assert (erie.n_identification, erie.n_validation) == (40, 17)
+    for mode in ("oe", "eiv"):
+        assert robot_arm.modes[mode].fit > 90, mode
+        assert {c.start for c in robot_arm.modes[mode].candidates} >= {"lra", "arx"}
+    assert erie.modes["eiv"].misfit <= daisy.REFERENCE_MISFIT["erie"] * (1 + 1e-6)
+    paths = daisy.write_results(results, tmp_path / "out")
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["figure1.png", "results.json", "table.csv",
+                                                                    "table.md"]
+    table = paths["markdown"].read_text()
+    assert "| 8 | robot_arm | 1024 | 1 | 1 | 4 |" in table and "original software" in table
+    document = json.loads(paths["json"].read_text())
+    assert document["sets"][1]["modes"]["oe"]["fit"] > 90 and document["reference"]["mean_fit"]["oe"] == 35.2
+    rows = list(csv.DictReader(paths["csv"].open()))
+    assert [row["set"] for row in rows] == ["erie", "robot_arm"] and float(rows[1]["eiv_fit"]) > 90
+
+
+def test_runner_rejects_bad_choices(shared):
+    with pytest.raises(ValueError, match="not a data set of Table 1"):
+        daisy.run_benchmark(["distill2"], directory=shared, progress=None)
+    with pytest.raises(ValueError, match="at least one data set"):
+        daisy.run_benchmark([], directory=shared, progress=None)
+    with pytest.raises(ValueError, match="modes must be a non-empty selection of oe, eiv"):
+        daisy.run_set("erie", directory=shared, modes=["ml"])
+    with pytest.raises(ValueError, match="starts must"):
+        daisy.run_set("erie", directory=shared, starts=[])

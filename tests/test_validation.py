@@ -1,0 +1,122 @@
+"""ident.validation: the fit, validation of exact and unstable models, P_ell conditioning, the lag curve."""
+from __future__ import annotations
+
+import warnings
+
+import matplotlib
+import numpy as np
+import pytest
+
+from ident.representations import make_ss, random_system, simulate
+from ident.validation import (LagCurve, fit_percent, misfit_vs_lag, p_ell_condition, plot_lag_curves,
+                              spectral_radius, validate)
+
+matplotlib.use("Agg")
+
+
+def test_fit_percent_by_hand():
+    y = np.array([[1.0, 0.0], [-1.0, 2.0], [1.0, 0.0], [-1.0, 2.0]])
+    per_output, overall = fit_percent(y, y)
+    assert per_output.tolist() == [100.0, 100.0] and overall == 100.0
+    per_output, overall = fit_percent(y, np.tile(y.mean(axis=0), (4, 1)))  # the mean fits 0 %
+    assert per_output.tolist() == [0.0, 0.0] and overall == 0.0
+    yh = y.copy()
+    yh[:, 0] *= 0.5  # error = half the spread: 50 %
+    yh[:, 1] = -y[:, 1]  # far worse than the mean: clipped to 0 %
+    per_output, _ = fit_percent(y, yh)
+    assert per_output.tolist() == [50.0, 0.0]
+    per_output, overall = fit_percent(np.ones(5), np.zeros(5))
+    assert np.isnan(per_output[0]) and np.isnan(overall)  # a constant output has no fit
+
+
+def test_fit_percent_checks_shapes():
+    with pytest.raises(ValueError, match="same shape"):
+        fit_percent(np.zeros((5, 2)), np.zeros((5, 1)))
+
+
+def test_the_true_model_on_exact_data_fits_100():
+    rng = np.random.default_rng(1)
+    system = random_system(2, 3, 2, rng)
+    u = rng.standard_normal((300, 2))
+    x0 = rng.standard_normal(system.nstates)
+    result = validate(system, u, simulate(system, u, x0))
+    assert np.allclose(result.fit, 100, atol=1e-8) and abs(result.overall - 100) < 1e-8
+    assert np.allclose(result.x0, x0, atol=1e-8) and result.reason == ""
+    assert result.mean_fit == pytest.approx(100)
+
+
+def test_an_autonomous_model():
+    system = make_ss([[0.9, 0.3], [-0.3, 0.9]], np.zeros((2, 0)), [[1.0, 0.0]], np.zeros((1, 0)))
+    y = simulate(system, 50, [1.0, -1.0])
+    assert validate(system, None, y).fit[0] == pytest.approx(100)
+
+
+def test_an_unstable_model_gets_0_with_a_reason_and_no_warnings():
+    rng = np.random.default_rng(2)
+    u = rng.standard_normal((1000, 1))
+    y = simulate(random_system(1, 1, 1, rng), u)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        exploding = validate(make_ss([[1.8]], [[1.0]], [[1.0]], [[0.0]]), u, y)  # 1.8^999: not simulated
+        growing = validate(make_ss([[1.2]], [[1.0]], [[1.0]], [[0.0]]), u, y)  # 1.2^999 = 1e79: simulated
+    assert exploding.fit.tolist() == [0.0] and exploding.yh is None
+    assert "unstable: spectral radius 1.8" in exploding.reason and "not simulated" in exploding.reason
+    assert growing.fit.tolist() == [0.0] and "unstable: spectral radius 1.2" in growing.reason
+
+
+def test_validate_names_its_arguments():
+    system = random_system(1, 1, 1, 0)
+    with pytest.raises(TypeError, match="sys must be a discrete-time control.StateSpace"):
+        validate("model", np.zeros(5), np.zeros(5))
+    with pytest.raises(ValueError, match="u and y must be T x m and T x p .*got u \\(5, 2\\)"):
+        validate(system, np.zeros((5, 2)), np.zeros(5))
+    with pytest.raises(ValueError, match="finite"):
+        validate(system, np.full(5, np.nan), np.zeros(5))
+
+
+def test_spectral_radius():
+    assert spectral_radius(make_ss([[0.5, 1.0], [0.0, -0.9]], [[1.0], [0.0]], [[1.0, 0.0]], [[0.0]])) == 0.9
+    assert spectral_radius(make_ss(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[2.0]])) == 0.0
+
+
+def test_p_ell_condition_is_a_property_of_the_model():
+    R = np.array([[0.2, -0.5, 0.7, 1.2, 0.0, -1.0]])  # m = 1, p = 1, ell = 2, P_2 = 1
+    condition = p_ell_condition(R, 1, 2)
+    assert 1 <= condition < 10
+    assert p_ell_condition(-7.5 * R, 1, 2) == pytest.approx(condition)  # R and S R: the same model
+    singular = R.copy()
+    singular[0, -1] = 0.0
+    assert p_ell_condition(singular, 1, 2) == np.inf
+    nearly = R.copy()
+    nearly[0, -1] = -1e-9
+    assert p_ell_condition(nearly, 1, 2) > 1e8
+    with pytest.raises(ValueError, match="p x \\(ell\\+1\\) q"):
+        p_ell_condition(R, 2, 2)
+
+
+def test_misfit_against_the_lag():
+    rng = np.random.default_rng(7)
+    system = random_system(1, 1, 2, rng)
+    u = rng.standard_normal((120, 1))
+    w = np.hstack([u, simulate(system, u, rng.standard_normal(2))]) + 1e-3 * rng.standard_normal((120, 2))
+    curve = misfit_vs_lag(w[:80], 1, [1, 2, 3, 60], exct=[0], validation=w[80:], label="output error")
+    assert curve.lags == [1, 2, 3, 60]
+    assert curve.misfit[1] < 1e-3 * curve.misfit[0] and curve.misfit[2] <= curve.misfit[1] * (1 + 1e-6)
+    assert curve.fit[1] > 99
+    assert np.isnan(curve.misfit[3]) and "lag 60" in curve.messages[3] and "samples" in curve.messages[3]
+    with pytest.raises(ValueError, match="lags must be"):
+        misfit_vs_lag(w, 1, [])
+
+
+def test_the_lag_plot_is_labelled(tmp_path):
+    curves = [LagCurve([1, 2, 3], np.array([10.0, 0.1, 0.09]), [3, 4, 5], [0.1] * 3, np.array([20.0, 95, 94]),
+                       [""] * 3, "output error"),
+              LagCurve([1, 2, 3], np.array([5.0, 0.05, 0.04]), [3, 4, 5], [0.1] * 3, None, [""] * 3, "")]
+    path = tmp_path / "lag.png"
+    figure = plot_lag_curves(curves, path, chosen=2, title="test")
+    assert path.stat().st_size > 1000
+    top, bottom = figure.axes
+    assert top.get_yscale() == "log" and "misfit" in top.get_ylabel() and "fit" in bottom.get_ylabel()
+    assert bottom.get_xlabel() == "lag ell"
+    labels = [text.get_text() for text in top.get_legend().get_texts()]
+    assert labels == ["output error", "curve 2", "lag of Table 1 (ell = 2)"]
