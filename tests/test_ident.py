@@ -128,6 +128,8 @@ def test_mass_spring_chain_exact_data() -> None:
     reference = json.loads((REFERENCE / "msd_results.json").read_text())
     sysh, info, wh, xini = ident(w, 1, 14)
     assert info.M / np.sum(w ** 2) < 1e-12  # reference: 6.66e-14 / 5.7e6, roundoff either way
+    # cond(O_14) ~ 6e7: the misfit of the returned model must not go through a null space
+    assert misfit(w, sysh)[0] / np.sum(w ** 2) < 1e-12
     sampled = np.linalg.eigvals(np.array(reference["true_d"]["A"]))
     errors = [np.min(np.abs(sampled - e)) for e in np.linalg.eigvals(sysh.A)]
     assert len(errors) == 14 and max(errors) < 5e-3, sorted(errors)[-3:]

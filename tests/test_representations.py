@@ -356,3 +356,16 @@ def test_non_normal_observer_form_is_simulated_accurately():
     u = rng.standard_normal((3000, m))
     y = simulate(sys, u, x0)
     np.testing.assert_allclose(inistate(u, y, obs), S @ x0, rtol=1e-6, atol=1e-6 * np.abs(S @ x0).max())
+
+
+def test_kernel_is_read_off_an_observer_form_exactly():
+    from ident.representations import observer_form_kernel
+    rng = np.random.default_rng(12)
+    for m, p, ell in [(1, 1, 3), (2, 2, 2), (0, 2, 2), (1, 3, 1)]:
+        R = normalize_kernel(rng.standard_normal((p, (ell + 1) * (m + p))), m, ell)
+        sys = kernel_to_ss(R, m, ell)
+        read_off = observer_form_kernel(*(np.asarray(x, dtype=float) for x in (sys.A, sys.B, sys.C, sys.D)), ell)
+        np.testing.assert_allclose(read_off, R, rtol=0, atol=1e-14 * np.abs(R).max())
+        np.testing.assert_allclose(ss_to_kernel(sys), R, rtol=0, atol=1e-14 * np.abs(R).max())
+    other = random_system(1, 1, 2, rng)  # not in observer form: no read-off
+    assert observer_form_kernel(*(np.asarray(x, dtype=float) for x in (other.A, other.B, other.C, other.D)), 2) is None
