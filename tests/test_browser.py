@@ -1,0 +1,191 @@
+"""The woven pages in a real browser: headless Chromium loads each page of a fresh weave of
+``literate/`` and a check script, injected into a test copy of the page, reports what the reader
+would see: resources that failed to load, images and their sizes, the MathML formulas and their
+boxes, in-page links without a target.  Cross-page links are then checked against the ids each
+page reported.  A screenshot of the first screen of the index and of the first document is kept
+for inspection (in the test's temporary folder, or in ``$IDENT_SCREENSHOT_DIR``).
+
+Chromium is Debian's ``chromium`` (``apt-get install chromium``), or the program named by
+``$IDENT_CHROMIUM``; without one the tests are skipped.  It runs with no network use of its own
+(the flags below) and loads the pages from ``file://`` URLs.
+"""
+from __future__ import annotations
+
+import html
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import PROJECT_ROOT
+
+CHROMIUM_FLAGS = [
+    "--headless=new", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+    "--disable-default-apps", "--disable-extensions", "--hide-scrollbars", "--mute-audio",
+]
+
+EARLY_SCRIPT = """<script>
+window.__failed = [];
+window.addEventListener("error", function (event) {
+  var t = event.target;
+  if (t && t !== window && (t.src || t.href)) { window.__failed.push(t.src || t.href); }
+}, true);
+</script>"""
+
+CHECK_SCRIPT = """<script>
+window.addEventListener("load", function () {
+  var r = {failed: window.__failed.slice(), images: [], math: {count: 0, empty: [], notMath: []},
+           localLinksBroken: [], crossLinks: [], ids: [], stylesheets: [], resources: [], textWidth: 0};
+  document.querySelectorAll("img").forEach(function (img) {
+    var box = img.getBoundingClientRect();
+    r.images.push({src: img.getAttribute("src"), complete: img.complete, naturalWidth: img.naturalWidth,
+                   naturalHeight: img.naturalHeight, width: box.width, height: box.height});
+  });
+  document.querySelectorAll("math").forEach(function (m, k) {
+    var box = m.getBoundingClientRect();
+    r.math.count += 1;
+    if (!(box.width > 0 && box.height > 0)) { r.math.empty.push(k); }
+    if (getComputedStyle(m).display.indexOf("math") < 0) { r.math.notMath.push(getComputedStyle(m).display); }
+  });
+  document.querySelectorAll("a[href]").forEach(function (a) {
+    var href = a.getAttribute("href");
+    if (href.charAt(0) === "#") {
+      if (!document.getElementById(decodeURIComponent(href.slice(1)))) { r.localLinksBroken.push(href); }
+    } else if (!/^[a-z]+:/i.test(href)) {
+      r.crossLinks.push(href);
+    }
+  });
+  document.querySelectorAll("[id]").forEach(function (e) { r.ids.push(e.id); });
+  document.querySelectorAll("link[rel=stylesheet]").forEach(function (l) {
+    r.stylesheets.push({href: l.getAttribute("href"), loaded: !!l.sheet});
+  });
+  performance.getEntriesByType("resource").forEach(function (e) {
+    r.resources.push({name: e.name, type: e.initiatorType});
+  });
+  var p = document.querySelector("main > p");
+  if (p) { r.textWidth = p.getBoundingClientRect().width; r.fontSize = parseFloat(getComputedStyle(p).fontSize); }
+  var out = document.createElement("pre");
+  out.id = "check-results";
+  out.textContent = JSON.stringify(r);
+  document.body.appendChild(out);
+});
+</script>"""
+
+
+def find_chromium() -> str | None:
+    named = os.environ.get("IDENT_CHROMIUM")
+    if named:
+        return named if shutil.which(named) else None
+    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+pytest.importorskip("latex2mathml", reason="the weave needs latex2mathml (the docs extra)")
+CHROMIUM = find_chromium()
+pytestmark = pytest.mark.skipif(
+    CHROMIUM is None,
+    reason="no headless browser: install Debian's chromium (apt-get install -y chromium) or set IDENT_CHROMIUM",
+)
+
+
+def chromium(args: list[str], profile: Path, timeout: float = 120) -> subprocess.CompletedProcess:
+    command = [CHROMIUM, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args]
+    return subprocess.run(command, capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+
+
+@pytest.fixture(scope="module")
+def woven(tmp_path_factory) -> Path:
+    """A fresh weave of the real literate/ (pages and figures; the notebooks are not needed here)."""
+    out = tmp_path_factory.mktemp("woven")
+    done = subprocess.run([sys.executable, "tangle.py", "weave", "--out", str(out), "--no-notebooks"],
+                          cwd=PROJECT_ROOT, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, f"the weave failed:\n{done.stdout}\n{done.stderr}"
+    return out
+
+
+@pytest.fixture(scope="module")
+def checked(woven, tmp_path_factory) -> dict[str, dict]:
+    """Each page's check results, from a test copy of the page with the check script injected."""
+    profile = tmp_path_factory.mktemp("chromium-profile")
+    results = {}
+    for page in sorted(woven.glob("*.html")):
+        copy = page.with_name(f"check-{page.name}")
+        text = page.read_text(encoding="utf-8")
+        text = text.replace("<head>", "<head>\n" + EARLY_SCRIPT, 1)
+        text = text.replace("</body>", CHECK_SCRIPT + "\n</body>", 1)
+        copy.write_text(text, encoding="utf-8")
+        done = chromium(["--virtual-time-budget=5000", "--dump-dom", copy.as_uri()], profile)
+        copy.unlink()
+        found = re.search(r'<pre id="check-results">(.*?)</pre>', done.stdout, re.S)
+        assert found, (f"{page.name}: the check script reported nothing (exit {done.returncode}):\n"
+                       f"{done.stderr[-2000:]}")
+        results[page.name] = json.loads(html.unescape(found[1]))
+    return results
+
+
+def test_every_page_was_checked(woven, checked) -> None:
+    assert "index.html" in checked and len(checked) >= 3
+
+
+def test_no_resource_fails_to_load(checked) -> None:
+    for page, r in checked.items():
+        assert r["failed"] == [], f"{page}: failed to load {r['failed']}"
+        assert r["stylesheets"] and all(s["loaded"] for s in r["stylesheets"]), f"{page}: {r['stylesheets']}"
+        names = [e["name"] for e in r["resources"]]
+        assert all(n.startswith("file://") for n in names), f"{page}: loads from elsewhere: {names}"
+
+
+def test_images_load_with_a_size(checked) -> None:
+    images = [(page, image) for page, r in checked.items() for image in r["images"]]
+    for page, image in images:
+        assert image["complete"] and image["naturalWidth"] > 0 and image["naturalHeight"] > 0, (page, image)
+        assert image["width"] > 0 and image["height"] > 0, (page, image)
+        assert image["width"] <= 64 * 16 + 1, f"{page}: image wider than the page: {image}"
+
+
+def test_mathematics_is_rendered_as_mathml(checked) -> None:
+    assert checked["01-introduction.html"]["math"]["count"] >= 10
+    for page, r in checked.items():
+        assert r["math"]["empty"] == [], f"{page}: formulas with an empty box: {r['math']['empty'][:10]}"
+        assert r["math"]["notMath"] == [], f"{page}: <math> not laid out as MathML: {r['math']['notMath'][:5]}"
+
+
+def test_every_link_has_a_target(woven, checked) -> None:
+    for page, r in checked.items():
+        assert r["localLinksBroken"] == [], f"{page}: links to missing anchors: {r['localLinksBroken'][:10]}"
+        for href in r["crossLinks"]:
+            target, _, anchor = href.partition("#")
+            assert (woven / target).is_file(), f"{page}: link to a missing file {href}"
+            if anchor and target.endswith(".html"):
+                assert anchor in checked[target]["ids"], f"{page}: link to a missing anchor {href}"
+
+
+def test_ids_are_unique(checked) -> None:
+    for page, r in checked.items():
+        duplicates = sorted({i for i in r["ids"] if r["ids"].count(i) > 1})
+        assert duplicates == [], f"{page}: duplicate ids {duplicates}"
+
+
+def test_text_width_is_limited(checked) -> None:
+    r = checked["01-introduction.html"]
+    assert 0 < r["textWidth"] <= 46 * r["fontSize"], r
+
+
+def test_screenshot_of_the_first_screen(woven, tmp_path_factory) -> None:
+    folder = Path(os.environ.get("IDENT_SCREENSHOT_DIR") or tmp_path_factory.mktemp("screenshots"))
+    folder.mkdir(parents=True, exist_ok=True)
+    profile = tmp_path_factory.mktemp("chromium-screenshot-profile")
+    for name in ("index.html", "01-introduction.html"):
+        target = folder / name.replace(".html", ".png")
+        done = chromium(["--window-size=1280,900", f"--screenshot={target}", (woven / name).as_uri()], profile)
+        assert target.is_file() and target.stat().st_size > 10_000, done.stderr[-2000:]
+        print(f"screenshot of {name}: {target}")

@@ -1,0 +1,1080 @@
+#!/usr/bin/env python3
+"""Weave the literate sources of ident (``literate/*.md``) into a browsable document in ``docs/``.
+
+``python tangle.py weave`` (or ``python weave.py``) writes, from the documents that ``tangle.py``
+reads:
+
+* one HTML page per literate document and ``index.html`` with the contents, an index of the
+  chunks and an index of the package's public names (``ident.__all__``);
+* ``style.css``: the page style and the Pygments highlighting classes;
+* ``figures/``: the figures of the examples, as PNG files without metadata;
+* ``notebooks/``: each document as an executed Jupyter notebook (jupytext; outputs filled in from
+  the same run as the pages, no kernel needed).
+
+Mathematics is converted from LaTeX to MathML when weaving (latex2mathml), so the pages need
+neither JavaScript nor a network connection.  The example blocks run in reading order, one
+namespace per document, as ``tests/test_examples.py`` runs them: with the project root as the
+working directory and ``IDENT_FIGURES`` naming ``docs/figures``.  Under each example the page shows
+what it printed and its figures: files the example wrote into ``$IDENT_FIGURES``; or, if it wrote
+none, the matplotlib figures it left open in pyplot and the ``matplotlib.figure.Figure`` objects it
+bound to new top-level names.  A failing example stops the weave with its name, its ``file:line``
+and the traceback (exit status 1).
+
+Weaving twice gives the same files, except for output lines of the examples that report measured
+times.
+
+Usage::
+
+    python tangle.py weave                  # write docs/
+    python tangle.py weave --out /tmp/docs  # somewhere else
+    python tangle.py weave --no-notebooks   # pages only
+
+Needs markdown-it-py, mdit-py-plugins, latex2mathml, Pygments, matplotlib and jupytext (the
+``docs`` extra of the package).
+"""
+from __future__ import annotations
+
+import argparse
+import base64
+import contextlib
+import dataclasses
+import html
+import inspect
+import io
+import os
+import re
+import shutil
+import struct
+import sys
+import tempfile
+import time
+import traceback
+import warnings
+from pathlib import Path
+
+import tangle
+
+GENERATOR = "ident weave.py"
+FIGURE_DPI = 110
+IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg", ".gif", ".svg", ".webp"}
+MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".gif": "image/gif",
+        ".svg": "image/svg+xml", ".webp": "image/webp"}
+TEXT_COLUMNS = 88  # characters of code that fit in the text column (45rem at the CSS below)
+TEXT_WIDTH_PX = 720  # the text column in CSS pixels; a wider figure widens its example
+PLACEHOLDER = "WEAVEREF{}X"
+PLACEHOLDER_HTML = re.compile(r'<span class="[^"]*">WEAVEREF(\d+)X</span>|WEAVEREF(\d+)X')
+
+
+class WeaveError(Exception):
+    """The weave cannot go on; the message names the literate ``file:line``."""
+
+
+# --------------------------------------------------------------------------------------------
+# Cross references between chunks
+
+
+def slug(text: str, limit: int = 60) -> str:
+    """A lower-case id fragment of letters, digits and hyphens."""
+    text = re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-")
+    return text[:limit].rstrip("-") or "x"
+
+
+def page_name(document_path: str) -> str:
+    return Path(document_path).stem + ".html"
+
+
+@dataclasses.dataclass
+class Piece:
+    """One chunk block (a definition or a continuation) as woven."""
+
+    block: tangle.Block
+    number: int  # 1-based, over all documents in reading order
+    anchor: str  # the HTML id
+    page: str  # the HTML file holding it
+    index: int  # 0 for the definition, k for the k-th continuation
+
+
+@dataclasses.dataclass
+class CrossReferences:
+    pieces: dict[tangle.Location, Piece]  # by the location of the opening fence
+    by_name: dict[str, list[Piece]]
+    uses: dict[str, list[Piece]]  # chunk name -> the pieces that include it, in reading order
+    examples: dict[tangle.Location, str]  # example anchors
+
+    def link(self, piece: Piece, from_page: str) -> str:
+        return ("" if piece.page == from_page else piece.page) + "#" + piece.anchor
+
+
+def cross_references(web: tangle.Web) -> CrossReferences:
+    pieces: dict[tangle.Location, Piece] = {}
+    by_name: dict[str, list[Piece]] = {}
+    uses: dict[str, list[Piece]] = {}
+    examples: dict[tangle.Location, str] = {}
+    taken: set[str] = set()
+
+    def unique(base: str) -> str:
+        anchor, k = base, 2
+        while anchor in taken:
+            anchor, k = f"{base}-{k}", k + 1
+        taken.add(anchor)
+        return anchor
+
+    number = 0
+    for document in web.documents:
+        for block in document.items:
+            if not isinstance(block, tangle.Block):
+                continue
+            if block.kind == "example":
+                examples[block.location] = unique("example-" + slug(block.name))
+            elif block.kind == "chunk":
+                number += 1
+                siblings = by_name.setdefault(block.name, [])
+                base = "chunk-" + slug(block.name) + (f"-{len(siblings) + 1}" if siblings else "")
+                piece = Piece(block, number, unique(base), page_name(document.path), len(siblings))
+                siblings.append(piece)
+                pieces[block.location] = piece
+    for piece in pieces.values():
+        for _, _, target in tangle.references(piece.block):
+            users = uses.setdefault(target, [])
+            if not users or users[-1] is not piece:
+                users.append(piece)
+    return CrossReferences(pieces, by_name, uses, examples)
+
+
+def reachable(web: tangle.Web, name: str) -> list[str]:
+    """Chunk names included, directly or not, by chunk ``name`` (itself first)."""
+    order, stack = [], [name]
+    while stack:
+        current = stack.pop()
+        if current in order or current not in web.pieces:
+            continue
+        order.append(current)
+        targets = [t for block in web.pieces[current] for _, _, t in tangle.references(block)]
+        stack.extend(reversed(targets))
+    return order
+
+
+# --------------------------------------------------------------------------------------------
+# Running the examples
+
+
+@dataclasses.dataclass
+class Figure:
+    path: str  # relative to the output folder, with forward slashes
+    width: int | None
+    height: int | None
+
+
+@dataclasses.dataclass
+class Result:
+    """What an example printed and drew."""
+
+    stdout: str = ""
+    stderr: str = ""
+    figures: list[Figure] = dataclasses.field(default_factory=list)
+
+
+def png_size(data: bytes) -> tuple[int | None, int | None]:
+    if data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR":
+        width, height = struct.unpack(">II", data[16:24])
+        return width, height
+    return None, None
+
+
+def strip_png_metadata(data: bytes) -> bytes:
+    """The PNG without its text and time chunks (so that the same figure gives the same bytes)."""
+    if data[:8] != b"\x89PNG\r\n\x1a\n":
+        return data
+    out, position = [data[:8]], 8
+    while position + 8 <= len(data):
+        length, kind = struct.unpack(">I4s", data[position:position + 8])
+        end = position + 12 + length
+        if kind not in (b"tEXt", b"zTXt", b"iTXt", b"tIME"):
+            out.append(data[position:end])
+        position = end
+    return b"".join(out)
+
+
+def compact_png(data: bytes) -> bytes:
+    """A smaller PNG of the same picture: an opaque figure as 256 colours (Pillow), no metadata.
+
+    Plots have few colours besides the anti-aliasing shades, so the palette image looks the same at
+    a third of the size; a figure with transparent pixels is only stripped of its metadata.
+    """
+    data = strip_png_metadata(data)
+    try:
+        from PIL import Image
+    except ImportError:  # Pillow comes with matplotlib; without it the figure stays as it is
+        return data
+    try:
+        with Image.open(io.BytesIO(data)) as image:
+            image.load()
+            if image.mode in ("RGBA", "LA", "PA") and image.getchannel("A").getextrema()[0] < 255:
+                return data
+            if image.mode == "P":
+                return data
+            palette = image.convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT,
+                                                    dither=Image.Dither.NONE)
+            buffer = io.BytesIO()
+            palette.save(buffer, format="PNG", optimize=True)
+    except Exception:  # not a picture Pillow can read: leave it alone
+        return data
+    smaller = strip_png_metadata(buffer.getvalue())
+    return smaller if len(smaller) < len(data) else data
+
+
+def folder_state(folder: Path) -> dict[str, tuple[int, int]]:
+    if not folder.is_dir():
+        return {}
+    return {p.relative_to(folder).as_posix(): (p.stat().st_size, p.stat().st_mtime_ns)
+            for p in folder.rglob("*") if p.is_file()}
+
+
+# a folder made by tempfile (mkdtemp, TemporaryDirectory): a random name in the temporary folder
+TEMPORARY_NAME = re.compile("(" + re.escape(tempfile.gettempdir().rstrip(os.sep) + os.sep) + r")tmp[a-z0-9_]{8}\b")
+
+
+class ExampleRunner:
+    """Runs the examples of the documents and collects their output and figures."""
+
+    def __init__(self, root: Path, out: Path):
+        self.root = root
+        self.out = out
+        self.figures = out / "figures"
+        self.seen_figures: list = []  # matplotlib figures already shown (kept alive: ids stay unique)
+
+    def run_document(self, document: tangle.Document, anchors: dict[tangle.Location, str]) -> dict:
+        namespace: dict = {"__name__": f"example:{document.path}"}
+        results = {}
+        for block in document.items:
+            if isinstance(block, tangle.Block) and block.kind == "example":
+                base = Path(document.path).stem + "-" + anchors[block.location].removeprefix("example-")
+                results[block.location] = self.run(block, namespace, base)
+        self.close_all()
+        return results
+
+    def run(self, block: tangle.Block, namespace: dict, base: str) -> Result:
+        source = "\n" * (block.body_location.line - 1) + "\n".join(block.lines) + "\n"
+        code = compile(source, str(self.root / block.location.file), "exec")
+        before = folder_state(self.figures)
+        stdout, stderr = io.StringIO(), io.StringIO()
+        try:
+            with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+                exec(code, namespace)
+        except (Exception, SystemExit) as error:
+            trace = "".join(traceback.format_exception(type(error), error, error.__traceback__.tb_next))
+            printed = stdout.getvalue() + stderr.getvalue()
+            if printed:
+                trace = "output before the failure:\n" + printed.rstrip("\n") + "\n" + trace
+            raise WeaveError(f"{block.location}: example '{block.name}' failed:\n{trace.rstrip()}") from None
+        result = Result(self.clean(stdout.getvalue()), self.clean(stderr.getvalue()))
+        after = folder_state(self.figures)
+        written = sorted(name for name, state in after.items() if before.get(name) != state)
+        for name in written:
+            path = self.figures / name
+            data = path.read_bytes()
+            if path.suffix.lower() == ".png":
+                compact = compact_png(data)
+                if compact != data:
+                    path.write_bytes(compact)
+                data = compact
+            result.figures.append(Figure("figures/" + name, *png_size(data)))
+        for k, figure in enumerate(self.new_figures(namespace), start=1):
+            if written:  # the example chose what to show by writing files
+                continue
+            name = f"{base}-{k}.png" if k > 1 else f"{base}.png"
+            result.figures.append(self.save(figure, name))
+        return result
+
+    def clean(self, text: str) -> str:
+        """Printed output with the paths that change from run to run made the same.
+
+        The output folder reads ``docs``, the project root ``.`` and the shared folder beside it
+        ``../shared``, wherever they are; a temporary folder of ``tempfile`` reads ``tmpXXXXXXXX``.
+        """
+        shared = self.root.parent / "shared"  # the project's data folder beside it
+        for folder, prefix, name in ((self.out, "docs/", "docs"), (shared, "../shared/", "../shared"),
+                                     (self.root, "", ".")):
+            text = text.replace(str(folder) + os.sep, prefix).replace(str(folder), name)
+        return TEMPORARY_NAME.sub(r"\g<1>tmpXXXXXXXX", text)
+
+    def new_figures(self, namespace: dict) -> list:
+        """Figures left open in pyplot, then Figure objects newly bound to top-level names."""
+        if "matplotlib" not in sys.modules:
+            return []
+        from matplotlib.figure import Figure as MatplotlibFigure
+
+        found = []
+        if "matplotlib.pyplot" in sys.modules:
+            import matplotlib.pyplot as plt
+
+            for number in plt.get_fignums():
+                figure = plt.figure(number)
+                found.append(figure)
+                plt.close(figure)
+        seen = {id(f) for f in self.seen_figures}
+        for value in namespace.values():
+            if isinstance(value, MatplotlibFigure) and id(value) not in seen and value not in found:
+                found.append(value)
+        self.seen_figures.extend(found)
+        return found
+
+    def save(self, figure, name: str) -> Figure:
+        self.figures.mkdir(parents=True, exist_ok=True)
+        buffer = io.BytesIO()
+        figure.savefig(buffer, format="png", dpi=FIGURE_DPI, metadata={"Software": None})
+        data = compact_png(buffer.getvalue())
+        (self.figures / name).write_bytes(data)
+        return Figure("figures/" + name, *png_size(data))
+
+    def close_all(self) -> None:
+        if "matplotlib.pyplot" in sys.modules:
+            sys.modules["matplotlib.pyplot"].close("all")
+        self.seen_figures.clear()
+
+
+@contextlib.contextmanager
+def example_environment(root: Path, out: Path):
+    """Working directory, import path, IDENT_FIGURES and a non-interactive matplotlib for the examples."""
+    saved_cwd, saved_path = os.getcwd(), list(sys.path)
+    saved_env = {k: os.environ.get(k) for k in ("IDENT_FIGURES", "MPLBACKEND", "SOURCE_DATE_EPOCH")}
+    os.environ["IDENT_FIGURES"] = str(out / "figures")
+    os.environ["MPLBACKEND"] = "Agg"
+    os.environ["SOURCE_DATE_EPOCH"] = "0"  # no dates in PDF/PS figures an example might write
+    if (root / "src").is_dir():
+        sys.path.insert(0, str(root / "src"))
+    saved_rc = None
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        saved_rc = matplotlib.rcParams.copy()
+        matplotlib.rcParams["svg.hashsalt"] = "ident-weave"
+        matplotlib.rcParams["figure.max_open_warning"] = 0
+    except ImportError:
+        pass
+    os.chdir(root)
+    try:
+        with warnings.catch_warnings():
+            yield
+    finally:
+        os.chdir(saved_cwd)
+        sys.path[:] = saved_path
+        for key, value in saved_env.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+        if saved_rc is not None:
+            import matplotlib
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                matplotlib.rcParams.update(saved_rc)
+
+
+# --------------------------------------------------------------------------------------------
+# Markdown, mathematics and code
+
+
+def make_markdown():
+    from markdown_it import MarkdownIt
+    from mdit_py_plugins.anchors import anchors_plugin
+    from mdit_py_plugins.dollarmath import dollarmath_plugin
+
+    md = MarkdownIt("commonmark", {"typographer": False}).enable(["table", "strikethrough"])
+    md.use(dollarmath_plugin, allow_labels=False, allow_space=False, allow_digits=False)
+    md.use(anchors_plugin, min_level=1, max_level=4)
+    return md
+
+
+MATHML = "http://www.w3.org/1998/Math/MathML"
+LIMIT_OPERATORS = {"min", "max", "lim", "sup", "inf", "arg min", "arg max", "argmin", "argmax", "lim sup",
+                   "lim inf", "det", "gcd", "Pr"}
+UPRIGHT = set("ΓΔΘΛΞΠΣΥΦΨΩ")  # capital Greek is upright in TeX; a one-letter <mi> would be italic
+FENCES = set("()[]{}|\u2016\u27e8\u27e9\u2308\u2309\u230a\u230b")
+
+
+def to_mathml(latex: str, display: bool) -> str:
+    """MathML Core for a LaTeX formula, as TeX would set it.
+
+    latex2mathml does the conversion; two things are then adjusted so that browsers set the formula
+    as TeX does: a delimiter written without \\left/\\right (``\\lVert x \\rVert^2``) keeps its size
+    (MathML would stretch it), except around a matrix; the limits of \\min, \\max, ... go under
+    the operator in displayed formulas (``movablelimits`` puts them to the side in running text);
+    and capital Greek letters stay upright.
+    """
+    import xml.etree.ElementTree as ElementTree
+
+    from latex2mathml.converter import convert
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        converted = convert(latex.strip(), display="block" if display else "inline")
+    ElementTree.register_namespace("", MATHML)
+    tree = ElementTree.fromstring(converted)
+    tag = lambda name: f"{{{MATHML}}}{name}"  # noqa: E731
+    for parent in tree.iter():
+        children = list(parent)
+        has_table = any(child.tag == tag("mtable") for child in children)
+        for child in children:
+            if (child.tag == tag("mo") and (child.text or "") in FENCES and "stretchy" not in child.attrib
+                    and not has_table):
+                child.set("stretchy", "false")
+            if child.tag in (tag("msub"), tag("msubsup")) and len(child) and child[0].tag == tag("mo") \
+                    and (child[0].text or "").strip() in LIMIT_OPERATORS:
+                child.tag = tag("munder" if child.tag == tag("msub") else "munderover")
+                child[0].set("movablelimits", "true")
+            if child.tag == tag("mi") and (child.text or "") in UPRIGHT and "mathvariant" not in child.attrib:
+                child.set("mathvariant", "normal")
+    unknown = sorted({e.text for e in tree.iter() if (e.text or "").startswith("\\") and len(e.text) > 1})
+    if unknown:
+        raise ValueError("unknown LaTeX command " + ", ".join(unknown))
+    return ElementTree.tostring(tree, encoding="unicode")
+
+
+class PageRenderer:
+    """Renders one literate document to HTML with markdown-it, MathML and Pygments."""
+
+    def __init__(self, weave: "Weave", document: tangle.Document, results: dict):
+        from pygments.formatters import HtmlFormatter
+
+        self.weave = weave
+        self.document = document
+        self.page = page_name(document.path)
+        self.results = results
+        self.formatter = HtmlFormatter(nowrap=True)
+        self.blocks = {b.location.line: b for b in document.items if isinstance(b, tangle.Block)}
+        self.rendered: set[int] = set()
+        self.md = make_markdown()
+        rules = self.md.renderer.rules  # bound methods: add_render_rule would rebind them to the renderer
+        rules["fence"] = self.render_fence
+        rules["code_block"] = self.render_code_block
+        rules["math_inline"] = self.render_math
+        rules["math_block"] = self.render_math
+        rules["link_open"] = self.render_link_open
+
+    # markdown-it render rules: (tokens, idx, options, env) as bound methods
+    def render_fence(self, tokens, idx, options, env) -> str:
+        token = tokens[idx]
+        line = token.map[0] + 1 if token.map else None
+        block = self.blocks.get(line)
+        if block is None:
+            language = tangle.parse_info(token.info)[0] or "text"
+            return self.highlight_block(token.content.rstrip("\n").split("\n"), language)
+        self.rendered.add(line)
+        if block.kind == "chunk":
+            return self.render_chunk(block)
+        if block.kind == "example":
+            return self.render_example(block)
+        return self.highlight_block(block.lines, tangle.parse_info(block.info)[0] or "text")
+
+    def render_code_block(self, tokens, idx, options, env) -> str:
+        content = tokens[idx].content
+        return f'<pre class="plain{wide(content.splitlines())}"><code>{html.escape(content)}</code></pre>\n'
+
+    def render_math(self, tokens, idx, options, env) -> str:
+        token = tokens[idx]
+        display = token.type == "math_block"
+        try:
+            mathml = to_mathml(token.content, display)
+        except Exception as error:  # latex2mathml raises various exceptions on unknown LaTeX
+            line = token.meta.get("line") or (token.map[0] + 1 if token.map else "?")
+            self.weave.warn(f"{self.document.path}:{line}: warning: cannot convert "
+                            f"${token.content.strip()}$ to MathML ({type(error).__name__}: {error})")
+            mathml = f'<code class="math-error">{html.escape(token.content)}</code>'
+        return f'<div class="math-display">{mathml}</div>\n' if display else mathml
+
+    def render_link_open(self, tokens, idx, options, env) -> str:
+        token = tokens[idx]
+        href = token.attrGet("href") or ""
+        target, hash_, fragment = href.partition("#")
+        if target.endswith(".md") and "://" not in target:
+            stem = Path(target).stem
+            if stem in self.weave.stems:
+                token.attrSet("href", f"{stem}.html" + (hash_ + fragment))
+        return self.md.renderer.renderToken(tokens, idx, options, env)
+
+    # pieces of the page
+    def highlight(self, text: str, language: str) -> str:
+        from pygments import highlight
+        from pygments.lexers import TextLexer, get_lexer_by_name
+        from pygments.util import ClassNotFound
+
+        try:
+            lexer = get_lexer_by_name(language, stripnl=False, ensurenl=True)
+        except ClassNotFound:
+            lexer = TextLexer(stripnl=False, ensurenl=True)
+        return highlight(text, lexer, self.formatter)
+
+    def highlight_block(self, lines: list[str], language: str, widen: bool = True) -> str:
+        lines = trim_blank(lines)
+        code = self.highlight("\n".join(lines), language).rstrip()
+        return f'<pre class="highlight{wide(lines) if widen else ""}"><code>{code}</code></pre>\n'
+
+    def render_chunk(self, block: tangle.Block) -> str:
+        xref = self.weave.xref
+        piece = xref.pieces[block.location]
+        names, lines = [], []
+        for line in trim_blank(block.lines):
+            match = tangle.REFERENCE.match(line)
+            if match:
+                names.append(tangle.normalise_name(match["name"]))
+                lines.append(match["indent"] + PLACEHOLDER.format(len(names) - 1))
+            else:
+                lines.append(line)
+        code = self.highlight("\n".join(lines), "python").rstrip()
+
+        def reference(match: re.Match) -> str:
+            target = names[int(match[1] or match[2])]
+            definition = xref.by_name[target][0]
+            return (f'<span class="chunk-ref">⟨<a href="{xref.link(definition, self.page)}">'
+                    f'{chunk_title(target)}</a>&#x2009;<span class="chunk-num">{definition.number}</span>'
+                    "⟩</span>")
+
+        code = PLACEHOLDER_HTML.sub(reference, code)
+        operator = "+≡" if block.continued else "≡"
+        head = (f'<div class="chunk-head"><a class="chunk-num" href="#{piece.anchor}" '
+                f'title="{html.escape(str(block.location))}">{piece.number}</a> '
+                f'<span class="chunk-name">⟨{chunk_title(block.name)}⟩</span>'
+                f'<span class="chunk-op">{operator}</span></div>')
+        return (f'<div class="chunk{wide(lines)}" id="{piece.anchor}">\n{head}\n'
+                f'<pre class="highlight"><code>{code}</code></pre>\n{self.chunk_notes(piece)}</div>\n')
+
+    def chunk_notes(self, piece: Piece) -> str:
+        xref, name = self.weave.xref, piece.block.name
+        siblings = xref.by_name[name]
+        notes = []
+        if piece.index > 0:
+            notes.append("Defined in " + self.piece_link(siblings[0]) + ".")
+        if piece.index + 1 < len(siblings):
+            later = siblings[piece.index + 1:]
+            notes.append("Continued in " + ", ".join(self.piece_link(p) for p in later) + ".")
+        if tangle.is_root(name):
+            if piece.index == 0:
+                notes.append(f"Root chunk: written to <code>{html.escape(name)}</code>.")
+        elif name in xref.uses:
+            notes.append("Used in " + ", ".join(self.piece_link(p, with_name=True) for p in xref.uses[name]) + ".")
+        elif piece.index == 0:
+            notes.append("Not used by any chunk.")
+        return f'<p class="chunk-notes">{" ".join(notes)}</p>\n' if notes else ""
+
+    def piece_link(self, piece: Piece, with_name: bool = False) -> str:
+        where = "" if piece.page == self.page else f" <span class=\"chunk-page\">({Path(piece.page).stem})</span>"
+        href = self.weave.xref.link(piece, self.page)
+        if with_name:
+            return (f'<a href="{href}">⟨{chunk_title(piece.block.name)}⟩&#x2009;'
+                    f'<span class="chunk-num">{piece.number}</span></a>{where}')
+        return f'<a href="{href}">{piece.number}</a>{where}'
+
+    def render_example(self, block: tangle.Block) -> str:
+        anchor = self.weave.xref.examples[block.location]
+        result = self.results.get(block.location)
+        lines = block.lines + (result.stdout.splitlines() + result.stderr.splitlines() if result else [])
+        large = result is not None and any((f.width or 0) > TEXT_WIDTH_PX for f in result.figures)
+        parts = [f'<div class="example{" wide" if large else wide(lines)}" id="{anchor}">',
+                 f'<div class="example-head"><a href="#{anchor}" title="{html.escape(str(block.location))}">'
+                 f'Example</a>: {html.escape(block.name)}</div>',
+                 self.highlight_block(block.lines, "python", widen=False).rstrip("\n")]
+        if result is not None:
+            if result.stdout:
+                parts.append(f'<pre class="output" aria-label="output">'
+                             f"{html.escape(result.stdout.rstrip())}</pre>")
+            if result.stderr:
+                parts.append(f'<pre class="output stderr" aria-label="standard error">'
+                             f'{html.escape(result.stderr.rstrip())}</pre>')
+            for k, figure in enumerate(result.figures, start=1):
+                parts.append(self.render_figure(figure, f"Figure {k} of the example “{block.name}”"))
+        parts.append("</div>")
+        return "\n".join(parts) + "\n"
+
+    def render_figure(self, figure: Figure, caption: str) -> str:
+        source = html.escape(figure.path)
+        if Path(figure.path).suffix.lower() not in IMAGE_SUFFIXES:
+            return f'<p class="figure-link"><a href="{source}">{html.escape(Path(figure.path).name)}</a></p>'
+        size = f' width="{figure.width}" height="{figure.height}"' if figure.width and figure.height else ""
+        return (f'<figure class="example-figure"><a href="{source}"><img src="{source}"{size} '
+                f'alt="{html.escape(caption)}"></a><figcaption>{html.escape(caption)}</figcaption></figure>')
+
+    def render(self) -> "Page":
+        text = self.weave.texts[self.document.path].replace("\r\n", "\n").replace("\r", "\n")
+        env: dict = {}
+        tokens = self.md.parse(text, env)
+        for token in tokens:  # inline tokens have no line of their own: give them their block's
+            if token.children and token.map:
+                for child in token.children:
+                    child.meta = dict(child.meta or {}, line=token.map[0] + 1)
+        headings = []
+        for k, token in enumerate(tokens):
+            if token.type == "heading_open":
+                inline = tokens[k + 1]
+                label = self.md.renderer.renderInline(inline.children or [], self.md.options, env)
+                headings.append((int(token.tag[1]), token.attrGet("id"), label, plain_title(inline)))
+        title_end = next((k for k, t in enumerate(tokens) if t.type == "heading_close" and t.tag == "h1"), -1)
+        head = self.md.renderer.render(tokens[:title_end + 1], self.md.options, env)
+        body = self.md.renderer.render(tokens[title_end + 1:], self.md.options, env)
+        missing = [b for line, b in self.blocks.items() if b.kind != "display" and line not in self.rendered]
+        if missing:
+            raise WeaveError(f"{missing[0].location}: the Markdown parser did not read this {missing[0].kind} "
+                             "as a fenced code block; start its fence at column 0 outside lists and quotes")
+        title = next((plain for level, _, _, plain in headings if level == 1), Path(self.page).stem)
+        headings = [(level, anchor, label) for level, anchor, label, _ in headings]
+        return Page(self.document, self.page, title, headings, head, body)
+
+
+def wide(lines: list[str]) -> str:
+    """" wide" (a class) for code with lines longer than the text column holds."""
+    return " wide" if any(len(line.expandtabs(4)) > TEXT_COLUMNS for line in lines) else ""
+
+
+def trim_blank(lines: list[str]) -> list[str]:
+    start, end = 0, len(lines)
+    while start < end and not lines[start].strip():
+        start += 1
+    while end > start and not lines[end - 1].strip():
+        end -= 1
+    return lines[start:end]
+
+
+def chunk_title(name: str) -> str:
+    """A chunk name as HTML: file names in code type, the rest as text."""
+    return f"<code>{html.escape(name)}</code>" if tangle.is_root(name) else html.escape(name)
+
+
+def plain_title(inline) -> str:
+    """A heading as plain text (for <title> and the navigation): formulas as their LaTeX source."""
+    return "".join(child.content for child in inline.children or []
+                   if child.type in ("text", "code_inline", "math_inline")).strip()
+
+
+@dataclasses.dataclass
+class Page:
+    document: tangle.Document
+    file: str
+    title: str
+    headings: list[tuple[int, str, str]]  # level, id, label (HTML)
+    head: str  # the HTML up to and including the title
+    body: str
+
+
+# --------------------------------------------------------------------------------------------
+# The whole weave
+
+
+STYLE = """\
+:root { color-scheme: light; --text: #1f2328; --muted: #59636e; --rule: #d1d9e0; --code-bg: #f6f8fa;
+  --link: #0550ae; --chunk: #6639ba; }
+html { font-size: 100%; -webkit-text-size-adjust: 100%; }
+body { margin: 0; color: var(--text); background: #fff; line-height: 1.6;
+  font-family: Charter, "Bitstream Charter", "Source Serif Pro", Georgia, "DejaVu Serif", serif; }
+.site, main, footer { max-width: 45rem; margin: 0 auto; padding: 0 1.25rem; }
+/* long code lines and large figures run wider than the text when the window allows, centred on
+   the text column */
+.wide { --wide: min(64rem, 100vw - 2.5rem); width: var(--wide);
+  margin-left: calc((100% - var(--wide)) / 2); box-sizing: border-box; }
+.site-bar { border-bottom: 1px solid var(--rule); background: #f6f8fa; }
+.site { display: flex; flex-wrap: wrap; gap: .3em 1.2em; padding-top: .5em; padding-bottom: .5em;
+  font: .9em/1.4 system-ui, -apple-system, "Segoe UI", "DejaVu Sans", sans-serif; }
+.site .home { font-weight: 600; margin-right: auto; }
+.site a[rel] span { display: inline-block; max-width: 16em; overflow: hidden; text-overflow: ellipsis;
+  white-space: nowrap; vertical-align: bottom; }
+h1, h2, h3, h4 { font-family: system-ui, -apple-system, "Segoe UI", "DejaVu Sans", sans-serif; line-height: 1.25;
+  margin: 1.6em 0 .6em; }
+h1 { font-size: 1.8em; margin-top: 1em; } h2 { font-size: 1.4em; border-bottom: 1px solid var(--rule);
+  padding-bottom: .2em; } h3 { font-size: 1.15em; } h4 { font-size: 1em; }
+a { color: var(--link); text-decoration: none; } a:hover { text-decoration: underline; }
+:target { scroll-margin-top: 1em; }
+p, li { overflow-wrap: break-word; }
+code, pre, kbd { font-family: "DejaVu Sans Mono", Menlo, Consolas, "Liberation Mono", monospace; }
+code { font-size: .85em; background: var(--code-bg); padding: .1em .25em; border-radius: 3px; }
+pre { font-size: .8em; line-height: 1.45; background: var(--code-bg); border: 1px solid #e1e6eb;
+  border-radius: 4px; padding: .6em .8em; overflow-x: auto; margin-top: 0; margin-bottom: 1em; tab-size: 4; }
+pre code { font-size: 1em; background: none; padding: 0; }
+table { border-collapse: collapse; display: block; overflow-x: auto; margin: 1em 0; font-size: .95em; }
+th, td { border: 1px solid var(--rule); padding: .3em .6em; vertical-align: top; text-align: left; }
+th { background: #f6f8fa; }
+img { max-width: 100%; height: auto; }
+math { font-family: "STIX Two Math", "Latin Modern Math", "Cambria Math", "TeX Gyre Pagella Math",
+  "DejaVu Math TeX Gyre", math; font-size: 1.05em; }
+.math-display { overflow-x: auto; overflow-y: hidden; margin: .9em 0; padding: .1em 0; }
+.math-error { color: #b42318; }
+nav.toc { border: 1px solid var(--rule); border-radius: 4px; padding: .5em 1em; margin: 1em 0 1.5em;
+  font-size: .92em; background: #fbfcfd; }
+nav.toc h2 { font-size: 1em; border: 0; margin: .3em 0; padding: 0; }
+nav.toc ul { margin: .2em 0; padding-left: 1.2em; } nav.toc li { margin: .1em 0; }
+.chunk, .example { margin-top: 1.2em; margin-bottom: 1.4em; }
+.chunk pre, .example pre { margin-bottom: .3em; }
+.chunk-head, .example-head { font-family: system-ui, -apple-system, "Segoe UI", "DejaVu Sans", sans-serif;
+  font-size: .9em; margin-bottom: .2em; }
+.chunk-head .chunk-num { color: var(--muted); margin-right: .2em; }
+.chunk-name { color: var(--chunk); font-style: italic; }
+.chunk-name code, .chunk-ref code, .chunk-notes code { font-style: normal; background: none; padding: 0; }
+.chunk-op { margin-left: .15em; }
+.chunk-ref { font-family: Charter, Georgia, "DejaVu Serif", serif; font-style: italic; color: var(--chunk); }
+.chunk-ref a { color: var(--chunk); }
+.chunk-num { font-size: .8em; font-style: normal; }
+.chunk-notes { font-size: .82em; color: var(--muted); margin: 0 0 .5em; }
+.chunk-page { font-size: .9em; }
+.example-head a { font-weight: 600; }
+pre.output { background: #fff; border-left: 3px solid #8c959f; border-radius: 0; max-height: 32em; }
+pre.stderr { border-left-color: #bf8700; color: #6e4b00; }
+figure { margin: .8em 0 1.2em; } figcaption { font-size: .85em; color: var(--muted); }
+ul.chunk-index { list-style: none; padding-left: 0; font-size: .95em; }
+ul.chunk-index li { margin: .15em 0; padding-left: 1.5em; text-indent: -1.5em; }
+.api-table .kind { font-size: .85em; }
+.api-table td:last-child { min-width: 12em; }
+.muted, footer { color: var(--muted); }
+footer { font-size: .85em; margin-top: 3em; }
+footer p { border-top: 1px solid var(--rule); padding: .6em 0 2em; margin: 0; }
+@media print { .site-bar, nav.toc { display: none; } pre { white-space: pre-wrap; } }
+"""
+
+
+# after the Pygments rules, which they adjust: docstrings read as text, not as loud strings
+PYGMENTS_OVERRIDES = """\
+.highlight .sd { color: #3e6b47; font-style: normal; }
+"""
+
+
+class Weave:
+    def __init__(self, root: Path, out: Path, notebooks: bool = True):
+        self.root = root.resolve()
+        self.out = out.resolve()
+        self.notebooks = notebooks
+        self.warnings: list[str] = []
+        self.math_count = 0
+        # the text is read once: pages, examples and notebooks all come from this snapshot
+        self.texts = {path.relative_to(self.root).as_posix(): path.read_text(encoding="utf-8")
+                      for path in tangle.literate_files(self.root)}
+        self.web = tangle.build_web([tangle.parse_document(text, path) for path, text in self.texts.items()])
+        self.xref = cross_references(self.web)
+        self.stems = {Path(d.path).stem for d in self.web.documents}
+
+    def warn(self, message: str) -> None:
+        if message in self.warnings:
+            return
+        self.warnings.append(message)
+        print(message, file=sys.stderr)
+
+    def run(self) -> dict:
+        started = time.perf_counter()
+        outputs, _ = tangle.tangle(self.root)
+        stale = tangle.differences(self.root, outputs)
+        if stale:
+            self.warn("weave: warning: src/ident is out of date with literate/ (run python tangle.py); "
+                      "the examples run against it: " + "; ".join(stale))
+        self.clean_output()
+        runner = ExampleRunner(self.root, self.out)
+        results: dict = {}
+        with example_environment(self.root, self.out):
+            for document in self.web.documents:
+                results[document.path] = runner.run_document(document, self.xref.examples)
+            api = self.public_names()
+        pages = [PageRenderer(self, d, results[d.path]).render() for d in self.web.documents]
+        self.write("style.css", self.stylesheet())
+        for k, page in enumerate(pages):
+            previous = pages[k - 1] if k > 0 else None
+            following = pages[k + 1] if k + 1 < len(pages) else None
+            self.write(page.file, self.page_html(page, previous, following))
+        self.write("index.html", self.index_html(pages, api))
+        notebooks = []
+        if self.notebooks:
+            for document in self.web.documents:
+                notebook = self.write_notebook(document, results[document.path])
+                if notebook:
+                    notebooks.append(notebook)
+        figures = sum(len(r.figures) for by_doc in results.values() for r in by_doc.values())
+        self.math_count = sum(page.body.count("<math ") + page.head.count("<math ") for page in pages)
+        return {"pages": len(pages), "figures": figures, "notebooks": len(notebooks),
+                "math": self.math_count, "seconds": time.perf_counter() - started,
+                "examples": sum(len(r) for r in results.values())}
+
+    # files
+    def clean_output(self) -> None:
+        """Remove what an earlier weave wrote (and nothing else) from the output folder."""
+        self.out.mkdir(parents=True, exist_ok=True)
+        for folder in ("figures", "notebooks"):
+            if (self.out / folder).is_dir():
+                shutil.rmtree(self.out / folder)
+        for path in self.out.glob("*.html"):
+            with path.open(encoding="utf-8", errors="replace") as handle:
+                if f'<meta name="generator" content="{GENERATOR}">' in handle.read(2000):
+                    path.unlink()
+        (self.out / "figures").mkdir()
+
+    def write(self, name: str, text: str) -> None:
+        path = self.out / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with path.open("w", encoding="utf-8", newline="\n") as handle:
+            handle.write(text)
+
+    def stylesheet(self) -> str:
+        from pygments.formatters import HtmlFormatter
+
+        pygments_css = HtmlFormatter(style="default").get_style_defs(".highlight")
+        replaced = (".highlight {", ".highlight  {", "pre {", "td.linenos", "span.linenos")  # the page's own
+        pygments_css = "\n".join(line for line in pygments_css.splitlines() if not line.startswith(replaced))
+        return (f"/* Generated by {GENERATOR}. */\n{STYLE}\n/* Pygments (style 'default') */\n{pygments_css}\n"
+                f"{PYGMENTS_OVERRIDES}")
+
+    # HTML pages
+    def frame(self, title: str, bar: str, content: str, footer: str) -> str:
+        return (
+            "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+            "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+            f"<meta name=\"generator\" content=\"{GENERATOR}\">\n"
+            f"<title>{html.escape(title)}</title>\n<link rel=\"stylesheet\" href=\"style.css\">\n</head>\n<body>\n"
+            f"<div class=\"site-bar\"><nav class=\"site\">{bar}</nav></div>\n<main>\n{content}</main>\n"
+            f"<footer><p>{footer}</p></footer>\n</body>\n</html>\n"
+        )
+
+    def page_html(self, page: Page, previous: Page | None, following: Page | None) -> str:
+        bar = ['<a class="home" href="index.html">ident: the literate program</a>']
+        if previous:
+            bar.append(f'<a href="{previous.file}" rel="prev" title="{html.escape(previous.title)}">'
+                       f'← <span>{html.escape(previous.title)}</span></a>')
+        if following:
+            bar.append(f'<a href="{following.file}" rel="next" title="{html.escape(following.title)}">'
+                       f'<span>{html.escape(following.title)}</span> →</a>')
+        if self.notebooks:
+            bar.append(f'<a href="notebooks/{Path(page.file).stem}.ipynb" download>notebook</a>')
+        toc = self.toc_html(page.headings, page.file, with_page=False)
+        content = page.head + (f'<nav class="toc" aria-label="contents"><h2>Contents</h2>\n{toc}</nav>\n'
+                               if toc else "") + page.body
+        footer = (f"Woven from <code>{html.escape(page.document.path)}</code> by <code>weave.py</code>; "
+                  "the package <code>src/ident/</code> is tangled from the same text by <code>tangle.py</code>.")
+        return self.frame(page.title, " ".join(bar), content, footer)
+
+    @staticmethod
+    def toc_html(headings, file: str, with_page: bool, levels=(2, 3)) -> str:
+        """Nested lists of the headings of the given levels."""
+        out, depth = [], 0
+        for level, anchor, label in headings:
+            if level not in levels:
+                continue
+            wanted = min(level - min(levels) + 1, depth + 1)
+            if wanted > depth:
+                out.append("<ul>")
+                depth = wanted
+            else:
+                out.append("</li>")
+                while depth > wanted:
+                    out.append("</ul></li>")
+                    depth -= 1
+            href = (file if with_page else "") + f"#{anchor}"
+            out.append(f'<li><a href="{href}">{label}</a>')
+        if depth:
+            out.append("</li>")
+            while depth > 1:
+                out.append("</ul></li>")
+                depth -= 1
+            out.append("</ul>")
+        return "\n".join(out) + ("\n" if out else "")
+
+    def index_html(self, pages: list[Page], api: list[dict]) -> str:
+        intro = pages[0].title if pages else "ident"
+        parts = ["<h1>ident: the literate program</h1>",
+                 f"<p><em>{html.escape(intro)}</em>, after I. Markovsky. This is the literate program "
+                 "of the Python package <code>ident</code>, woven from the Markdown documents in "
+                 "<code>literate/</code>: the text with its mathematics, the code chunks of the package with "
+                 "their cross references, and the examples with their output as they ran when this was "
+                 "written.</p>",
+                 '<nav class="toc" aria-label="contents"><h2>Contents</h2>\n<ol>']
+        for page in pages:
+            sub = self.toc_html(page.headings, page.file, with_page=True, levels=(2,))
+            notebook = (f' <span class="muted">(<a href="notebooks/{Path(page.file).stem}.ipynb" download>'
+                        "notebook</a>)</span>" if self.notebooks else "")
+            parts.append(f'<li><a href="{page.file}">{html.escape(page.title)}</a>{notebook}\n{sub}</li>')
+        parts.append('<li><a href="#chunks">Index of chunks</a></li>')
+        if api:
+            parts.append('<li><a href="#public-names">Index of the public names</a></li>')
+        parts.append("</ol></nav>")
+        parts.append(self.chunk_index_html())
+        parts.append(self.api_html(api))
+        bar = '<a class="home" href="index.html">ident: the literate program</a>'
+        if pages:
+            bar += f' <a href="{pages[0].file}">start reading →</a>'
+        footer = ("Woven from <code>literate/</code> by <code>weave.py</code> "
+                  "(<code>python tangle.py weave</code>).")
+        return self.frame("ident: the literate program", bar, "\n".join(parts) + "\n", footer)
+
+    def chunk_index_html(self) -> str:
+        """Noweb's index: each chunk with the numbers of its pieces and of the chunks using it."""
+        xref = self.xref
+
+        def number(piece: Piece) -> str:
+            where = f"{piece.block.location}: ⟨{piece.block.name}⟩"
+            return f'<a href="{piece.page}#{piece.anchor}" title="{html.escape(where)}">{piece.number}</a>'
+
+        def entry(name: str) -> str:
+            pieces = xref.by_name[name]
+            text = (f'<li><span class="chunk-name">⟨<a href="{pieces[0].page}#{pieces[0].anchor}">'
+                    f"{chunk_title(name)}</a>⟩</span> {', '.join(number(p) for p in pieces)}")
+            if not tangle.is_root(name):
+                users = xref.uses.get(name, [])
+                text += (' <span class="muted">used in</span> ' + ", ".join(number(p) for p in users)
+                         if users else ' <span class="muted">(not used)</span>')
+            return text + "</li>"
+
+        roots = sorted(n for n in xref.by_name if tangle.is_root(n))
+        others = sorted((n for n in xref.by_name if not tangle.is_root(n)), key=lambda n: (n.casefold(), n))
+        return ('<h2 id="chunks">Index of chunks</h2>\n<p>The numbers are those of the chunks in the '
+                "text: first the definition and its continuations, then, after “used in”, the chunks that "
+                "include it. The files of the package come first; hovering over a number shows where it "
+                "is.</p>\n<h3 id=\"chunks-files\">Files</h3>\n<ul class=\"chunk-index\">\n"
+                + "\n".join(entry(n) for n in roots)
+                + '\n</ul>\n<h3 id="chunks-all">Chunks</h3>\n<ul class="chunk-index">\n'
+                + "\n".join(entry(n) for n in others) + "\n</ul>")
+
+    def public_names(self) -> list[dict]:
+        """The names in ident.__all__ with their kind, summary and defining chunk."""
+        if not (self.root / tangle.PACKAGE_DIR / "__init__.py").is_file():
+            return []
+        try:
+            import importlib
+
+            package = importlib.import_module("ident")
+        except Exception as error:  # the index is optional; the examples would have failed first
+            self.warn(f"weave: warning: cannot import ident for the index of public names: {error}")
+            return []
+        entries = []
+        for name in getattr(package, "__all__", []):
+            value = getattr(package, name, None)
+            if inspect.isclass(value):
+                kind = "exception" if issubclass(value, BaseException) else "class"
+            elif callable(value):
+                kind = "function"
+            else:
+                kind = "constant"
+            doc = inspect.getdoc(value) if kind != "constant" else ""
+            summary = (doc or "").strip().split("\n\n")[0].replace("\n", " ")
+            if kind == "class" and summary.startswith(name + "("):  # a dataclass's generated docstring
+                summary = ""
+            module = getattr(value, "__module__", None) or package.__name__
+            entries.append({"name": name, "kind": kind, "summary": summary,
+                            "piece": self.defining_piece(name, module)})
+        return entries
+
+    def defining_piece(self, name: str, module: str) -> Piece | None:
+        pattern = re.compile(rf"^(\s*)(?:async\s+def|def|class)\s+{re.escape(name)}\b|^({re.escape(name)})\s*[:=]")
+        parts = module.split(".")
+        root = "/".join([tangle.PACKAGE_DIR] + parts[1:]) + ".py" if parts[0] == "ident" else ""
+        candidates = reachable(self.web, root) if root in self.web.pieces else []
+        if root and root not in self.web.pieces:
+            candidates = reachable(self.web, root[:-3] + "/__init__.py")
+        everything = [n for n in self.xref.by_name if n not in candidates]
+        for names in (candidates, everything):
+            best = None
+            for chunk in names:
+                for piece in self.xref.by_name.get(chunk, []):
+                    for line in piece.block.lines:
+                        match = pattern.match(line)
+                        if match and (best is None or (match[1] or "") == ""):
+                            if (match[1] or "") == "":
+                                return piece
+                            best = best or piece
+            if best:
+                return best
+        return None
+
+    def api_html(self, api: list[dict]) -> str:
+        if not api:
+            return ""
+        rows = []
+        for entry in api:
+            piece = entry["piece"]
+            where = (f'<span class="chunk-name">⟨<a href="{piece.page}#{piece.anchor}">'
+                     f'{chunk_title(piece.block.name)}</a>⟩</span>&#x2009;<span class="chunk-num">'
+                     f"{piece.number}</span>") if piece else ""
+            call = "()" if entry["kind"] == "function" else ""
+            summary = re.sub(r"`+([^`]+)`+", r"<code>\1</code>", html.escape(entry["summary"]))
+            rows.append(f'<tr><td><code>{html.escape(entry["name"])}{call}</code><br>'
+                        f'<span class="muted kind">{entry["kind"]}</span></td>'
+                        f"<td>{summary}</td><td>{where}</td></tr>")
+        return ('<h2 id="public-names">Index of the public names</h2>\n<p>What <code>import ident</code> '
+                "exports (<code>ident.__all__</code>), with the first paragraph of each docstring and the chunk "
+                "that defines it.</p>\n<table class=\"api-table\">\n"
+                "<tr><th>name</th><th>summary</th><th>defined in</th></tr>\n"
+                + "\n".join(rows) + "\n</table>")
+
+    # notebooks
+    def write_notebook(self, document: tangle.Document, results: dict) -> str | None:
+        import jupytext
+        import nbformat
+
+        try:
+            notebook = jupytext.reads(self.texts[document.path], fmt="md")
+        except Exception as error:
+            self.warn(f"{document.path}: warning: jupytext cannot read it, no notebook: {error}")
+            return None
+        examples = [b for b in document.items if isinstance(b, tangle.Block) and b.kind == "example"]
+        cells = [c for c in notebook.cells if c.cell_type == "code"]
+        expected = ["\n".join(["# example: " + b.name] + b.lines) for b in examples]
+        if [c.source for c in cells] != expected:
+            self.warn(f"{document.path}: warning: the notebook's code cells are not the examples; "
+                      "the notebook is written without outputs")
+            examples = []
+        for count, (cell, block) in enumerate(zip(cells, examples), start=1):
+            result = results[block.location]
+            cell.execution_count = count
+            cell.outputs = self.notebook_outputs(result)
+        for k, cell in enumerate(notebook.cells):
+            cell.id = f"cell-{k + 1}"
+            cell.metadata = {}
+        notebook.metadata = {
+            "kernelspec": {"display_name": "Python 3", "language": "python", "name": "python3"},
+            "language_info": {"name": "python"},
+        }
+        nbformat.validate(notebook)
+        name = f"notebooks/{Path(document.path).stem}.ipynb"
+        self.write(name, nbformat.writes(notebook) + "\n")
+        return name
+
+    def notebook_outputs(self, result: Result) -> list:
+        import nbformat
+
+        outputs = []
+        for stream, text in (("stdout", result.stdout), ("stderr", result.stderr)):
+            if text:
+                outputs.append(nbformat.v4.new_output("stream", name=stream, text=text))
+        for figure in result.figures:
+            suffix = Path(figure.path).suffix.lower()
+            data = (self.out / figure.path).read_bytes()
+            if suffix == ".svg":
+                bundle = {"image/svg+xml": data.decode("utf-8")}
+            elif suffix in MIME:
+                bundle = {MIME[suffix]: base64.b64encode(data).decode("ascii")}
+            else:
+                continue
+            bundle["text/plain"] = f"<Figure {Path(figure.path).name}>"
+            outputs.append(nbformat.v4.new_output("display_data", data=bundle))
+        return outputs
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python tangle.py weave", description=__doc__.split("\n\n")[0])
+    default_root = Path(__file__).resolve().parent
+    parser.add_argument("--root", type=Path, default=default_root,
+                        help="project root holding literate/ (default: this file's folder)")
+    parser.add_argument("--out", type=Path, help="output folder (default: ROOT/docs)")
+    parser.add_argument("--no-notebooks", action="store_true", help="write the pages only")
+    args = parser.parse_args(argv)
+    out = args.out if args.out is not None else args.root / "docs"
+    try:
+        weave = Weave(args.root, out, notebooks=not args.no_notebooks)
+        summary = weave.run()
+    except (tangle.TangleError, WeaveError) as error:
+        print(f"weave: error: {error}", file=sys.stderr)
+        return 1
+    except ImportError as error:
+        print(f"weave: error: {error}; install the documentation dependencies: pip install -e '.[docs]'",
+              file=sys.stderr)
+        return 1
+    print(f"weave: wrote {out}: {summary['pages']} pages and index.html, {summary['examples']} examples run, "
+          f"{summary['figures']} figures, {summary['notebooks']} notebooks, {summary['math']} formulas "
+          f"in {summary['seconds']:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
