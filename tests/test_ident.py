@@ -225,3 +225,20 @@ def test_nonconvergence_is_reported_and_warned() -> None:
     with pytest.warns(SLRAWarning):
         _, info, _, _ = ident(w, 1, 3, maxiter=1)
     assert not info.converged and info.iter == 1 and info.message
+
+
+@pytest.mark.parametrize("scale", [1e-4, 1e4])
+def test_badly_scaled_variable_does_not_break_convergence(scale) -> None:
+    rng = np.random.default_rng(21)
+    sys = random_system(1, 2, 2, rng)
+    w = trajectory(sys, 200, rng)
+    w_scaled = w.copy()
+    w_scaled[:, 1] *= scale  # one output in other units
+    sysh, info, wh, _ = ident(w_scaled, 1, 2)
+    assert info.M / np.sum(w_scaled ** 2) < 1e-12  # exact data stay exact
+    scaled_sys = make_ss(sys.A, sys.B, np.diag([scale, 1.0]) @ sys.C, np.diag([scale, 1.0]) @ sys.D)
+    assert relative_markov_error(sysh, scaled_sys) < 1e-6
+    noisy = w_scaled + 0.05 * np.abs(w_scaled).max(axis=0) * rng.standard_normal(w.shape)
+    _, info_noisy, _, _ = ident(noisy, 1, 2)
+    assert info_noisy.converged, info_noisy.message
+    assert info_noisy.M <= misfit(noisy, scaled_sys)[0]
