@@ -3,9 +3,12 @@
 For each set: w = [u y] (inputs first), every column centred over the whole set, the first
 ceil(0.7 T) samples, q = m + p, the lag ell of datasets.toml, Hankel depth ell + 1 (time-major
 rows), rank (ell + 1) q - p, all weights 1, the default initial approximation, maxiter 100.
+A misfit counts as reaching the reference's when it is at most the reference plus half a unit in the
+last digit the reference prints (ballbeam: 2.43137e-3 is printed to 6 digits; the minimum is
+2.4313737e-3).
 The data are read from ../shared/daisy beside the project. Not a test: it prints a table.
 
-Usage: python benchmarks/daisy_solver.py [MAXITER] [--jacobian=projection|true] [--no-secant] [SET ...]
+Usage: python benchmarks/daisy_solver.py [MAXITER] [--jacobian=projection|true] [--secant|--no-secant] [SET ...]
 """
 import math
 import sys
@@ -36,6 +39,14 @@ REFERENCE = {
 }
 
 
+def reference_tolerance(value):
+    """Half a unit in the last digit the reference prints (the README gives 5 to 8 significant
+    digits): a misfit within this of the reference is the reference's value."""
+    mantissa = repr(float(value)).split("e")[0].replace("-", "").replace(".", "").lstrip("0")
+    exponent = math.floor(math.log10(abs(value)))
+    return 0.5 * 10.0 ** (exponent - len(mantissa) + 1)
+
+
 def load(name):
     """Identification part of one set: (w, m, p, ell)."""
     meta = tomllib.loads((DAISY / "datasets.toml").read_text())[name]
@@ -46,15 +57,16 @@ def load(name):
     return w[: math.ceil(0.7 * len(w))], meta["m"], meta["p"], meta["ell"]
 
 
-def run(name, maxiter=100, jacobian="projection", secant=True):
+def run(name, maxiter=100, jacobian="projection", secant=None):
     """Solve one set; returns the SLRAResult."""
     w, m, p, ell = load(name)
     n_samples, n_vars = w.shape
     structure = Structure.time_major(n_vars, ell, [n_samples - ell])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SLRAWarning)
+        options = {} if secant is None else {"secant": secant}  # None: the solver's default
         return slra(structure.params_from_series([w]), structure, (ell + 1) * n_vars - p,
-                    maxiter=maxiter, jacobian=jacobian, secant=secant)
+                    maxiter=maxiter, jacobian=jacobian, **options)
 
 
 def main(argv):
@@ -63,7 +75,7 @@ def main(argv):
     maxiter = next((int(a) for a in argv if a.isdigit()), 100)
     options = dict(a.lstrip("-").partition("=")[::2] for a in argv if a.startswith("--"))
     jacobian = options.get("jacobian", "projection")
-    secant = "no-secant" not in options
+    secant = False if "no-secant" in options else True if "secant" in options else None
     names = [a for a in argv if not a.isdigit() and not a.startswith("--")] or SETS
     print(f"maxiter {maxiter}, jacobian={jacobian}, secant={secant}")
     print(f"{'set':17s} {'M (ident)':>14s} {'M (reference)':>14s} {'rel.diff':>9s} "
@@ -79,13 +91,14 @@ def main(argv):
         else:
             relative = (result.misfit - reference_misfit) / reference_misfit
             shown = f"{reference_misfit:14.8g}"
-            all_met &= result.misfit <= reference_misfit * (1 + 1e-7)
+            all_met &= result.misfit <= reference_misfit + reference_tolerance(reference_misfit)
         all_met &= result.iterations <= 50
         print(f"{name:17s} {result.misfit:14.8g} {shown:>14s} {relative:9.1e} {result.iterations:5d} "
               f"{str(reference_iterations or '-'):>6s} {result.time:7.3f} {str(reference_seconds or '-'):>7s}  "
               f"{'yes' if result.converged else 'NO ':4s}  {result.message}", flush=True)
     print(f"total solver time {total:.2f} s (reference {total_reference:.1f} s, ratio "
-          f"{total / max(total_reference, 1e-300):.3f}); all targets (M <= reference, iterations <= 50): {all_met}")
+          f"{total / max(total_reference, 1e-300):.3f}); all targets (M <= reference to its printed digits, "
+          f"iterations <= 50): {all_met}")
 
 
 if __name__ == "__main__":

@@ -173,7 +173,7 @@ def test_gradient_matches_central_differences(weights):
     state = problem.evaluate(chart.kernel(x))
     numerical = central_differences(lambda z: problem.evaluate(chart.kernel(z)).cost, x)
     for normal_equations in (problem.normal_equations_projection, problem.normal_equations_true):
-        _, half_gradient = normal_equations(state, chart.free_columns)
+        _, half_gradient, _ = normal_equations(state, chart.free_columns)
         assert np.allclose(2 * half_gradient, numerical, rtol=1e-6, atol=1e-6 * np.abs(numerical).max())
 
 
@@ -185,7 +185,7 @@ def test_true_jacobian_of_the_whitened_residual():
         return np.linalg.solve(np.linalg.cholesky(Gamma), r)
 
     J = central_differences(eps, x)
-    H, half_gradient = problem.normal_equations_true(problem.evaluate(chart.kernel(x)), chart.free_columns)
+    H, half_gradient, _ = problem.normal_equations_true(problem.evaluate(chart.kernel(x)), chart.free_columns)
     assert np.abs(J.T @ J - H).max() < 1e-6 * np.abs(H).max()
     assert np.abs(J.T @ eps(x) - half_gradient).max() < 1e-6 * np.abs(half_gradient).max()
 
@@ -198,8 +198,8 @@ def test_projection_jacobian_of_the_correction_residual():
         return np.sqrt(np.diag(V)) * (G.T @ y)
 
     J = central_differences(correction, x)
-    H, half_gradient = problem.normal_equations_projection(problem.evaluate(chart.kernel(x)),
-                                                           chart.free_columns)
+    H, half_gradient, _ = problem.normal_equations_projection(problem.evaluate(chart.kernel(x)),
+                                                              chart.free_columns)
     assert np.abs(J.T @ J - H).max() < 1e-6 * np.abs(H).max()
     assert np.abs(J.T @ correction(x) - half_gradient).max() < 1e-6 * np.abs(half_gradient).max()
 
@@ -216,14 +216,15 @@ def test_stationary_factor_and_chunking_agree_with_the_full_recursion(monkeypatc
     chart = solver._Chart.from_kernel(R)
     problem = solver._Problem(p, structure)
     state = problem.evaluate(R)
-    H1, g1 = problem.normal_equations_true(state, chart.free_columns)
-    Hp1, gp1 = problem.normal_equations_projection(state, chart.free_columns)
+    H1, g1, _ = problem.normal_equations_true(state, chart.free_columns)
+    Hp1, gp1, E1 = problem.normal_equations_projection(state, chart.free_columns)
     monkeypatch.setattr(solver, "_STAT_TOL", -1.0)  # never stationary: the full recursion
     monkeypatch.setattr(solver, "_CHUNK_ELEMS", 100)  # many small chunks
-    H2, g2 = problem.normal_equations_true(state, chart.free_columns)
-    Hp2, gp2 = problem.normal_equations_projection(state, chart.free_columns)
+    H2, g2, _ = problem.normal_equations_true(state, chart.free_columns)
+    Hp2, gp2, E2 = problem.normal_equations_projection(state, chart.free_columns)
     assert np.abs(H1 - H2).max() < 1e-11 * np.abs(H2).max()
     assert np.abs(Hp1 - Hp2).max() < 1e-11 * np.abs(Hp2).max()
+    assert np.abs(E1 - E2).max() < 1e-11 * np.abs(E2).max()
     assert np.allclose(g1, g2) and np.allclose(gp1, gp2)
 
 
@@ -234,7 +235,9 @@ def test_chunked_forward_substitution_matches_one_solve():
     rhs = rng.standard_normal((factor.shape[1], 4))
     whole = solver._triangular_solve(factor, rhs)
     forward = solver._ForwardSolver(factor)
-    pieces = [forward.solve(rhs[a:b]) for a, b in [(0, 5), (5, 7), (7, 40), (40, factor.shape[1])]]
+    # right-hand sides are passed and returned transposed: one C-ordered row per right-hand side
+    pieces = [forward.solve(np.ascontiguousarray(rhs[a:b].T)).T
+              for a, b in [(0, 5), (5, 7), (7, 40), (40, factor.shape[1])]]
     assert np.allclose(np.vstack(pieces), whole, rtol=1e-10, atol=1e-12)
 
 
@@ -352,3 +355,142 @@ def test_daisy_misfit_reaches_the_reference(name, reference_misfit):
     result = slra(structure.params_from_series([w]), structure, (ell + 1) * w.shape[1] - p_out)
     assert result.converged and result.iterations <= 50
     assert result.misfit <= reference_misfit * (1 + 1e-7)
+
+
+# ------------------------------------------------------- exact Hessian, delays, J^T products
+@pytest.mark.parametrize("weights", [True, False])
+def test_exact_hessian_matches_central_differences_of_the_gradient(weights):
+    structure, p, chart, x, problem = at_random_kernel(weights)
+
+    def gradient(z):
+        return 2 * problem.normal_equations_projection(problem.evaluate(chart.kernel(z)), chart.free_columns)[1]
+
+    numerical = central_differences(gradient, x)
+    _, _, half_hessian = problem.normal_equations_projection(problem.evaluate(chart.kernel(x)), chart.free_columns)
+    assert np.abs(2 * half_hessian - numerical).max() < 1e-6 * np.abs(numerical).max()
+
+
+def test_delayed_bases_agree_with_all_right_hand_sides(monkeypatch):
+    # long series with constant weights: the factor becomes stationary and the solver switches to the
+    # delayed bases; with _STAT_TOL < 0 it never does. Variable 3 is fixed: no c-bases for it.
+    rng = np.random.default_rng(7)
+    w = simulate(rng, 2, 2, 4, 3000)
+    structure = Structure.time_major(4, 2, [2998, 1500])
+    weights = np.ones(structure.n_params)
+    for samples_j in structure.split(weights):
+        samples_j[3][:] = np.inf
+    structure = Structure(structure.depths, structure.n_cols, structure.perm, weights)
+    p = structure.params_from_series([w, w[:1502] + 0.1 * rng.standard_normal((1502, 4))])
+    problem = solver._Problem(p, structure)
+    R = initial_kernel(p, structure, 10)
+    chart = solver._Chart.from_kernel(R)
+    state = problem.evaluate(R)
+    calls = []
+    original = solver._delayed_products
+    monkeypatch.setattr(solver, "_delayed_products", lambda *a: calls.append(1) or original(*a))
+    delayed = problem.normal_equations_projection(state, chart.free_columns)
+    assert calls, "the delayed bases were not used"
+    monkeypatch.setattr(solver, "_STAT_TOL", -1.0)
+    full = problem.normal_equations_projection(state, chart.free_columns)
+    for a, b in zip(delayed, full):
+        assert np.abs(a - b).max() < 1e-11 * np.abs(b).max()
+
+
+def test_delayed_products_match_direct_sums():
+    rng = np.random.default_rng(8)
+    n_base, n_eqs, max_delay = 3, 2, 3
+    delays = np.array([0, 1, 3])
+    for n in (2, 10):  # shorter and longer than max_delay
+        extended = rng.standard_normal((n_base, (max_delay + n) * n_eqs))
+        products = solver._delayed_products(extended, delays, max_delay, n, n_eqs)
+        blocks = extended.reshape(n_base, max_delay + n, n_eqs)
+        for i1, d1 in enumerate(delays):
+            for i2, d2 in enumerate(delays):
+                direct = sum(blocks[:, max_delay + t - d1] @ blocks[:, max_delay + t - d2].T for t in range(n))
+                assert np.allclose(products[i1, i2], direct, rtol=1e-12, atol=1e-12)
+
+
+def test_jacobian_transpose_product_of_the_correction_residual():
+    structure, p, chart, x, problem = at_random_kernel()
+
+    def correction(z):
+        return problem.correction_residual(problem.evaluate(chart.kernel(z)))
+
+    J = central_differences(correction, x)
+    rng = np.random.default_rng(9)
+    w = rng.standard_normal(structure.n_params)
+    state = problem.evaluate(chart.kernel(x))
+    assert np.abs(problem.jacobian_transpose_product(state, chart.free_columns, w) - J.T @ w).max() \
+        < 1e-6 * np.abs(J.T @ w).max()
+    G, V, _, _, y = dense_quantities(structure, p, chart.kernel(x))
+    assert np.allclose(correction(x), np.sqrt(np.diag(V)) * (G.T @ y), atol=1e-10)
+
+
+def test_cost_is_the_variational_form():
+    # f = 2 r^T y - Delta p^T W Delta p equals r^T Gamma^{-1} r = ||L^{-1} r||^2
+    structure, p, chart, x, problem = at_random_kernel()
+    state = problem.evaluate(chart.kernel(x))
+    whitened = sum(float(e.ravel() @ e.ravel()) for e in state.eps)
+    assert state.cost == pytest.approx(whitened, rel=1e-12)
+
+
+# ------------------------------------------------------------------- optimiser and stopping rule
+def test_convergence_is_certified_and_stable():
+    # converged by a Newton certificate; restarting from the result changes nothing
+    w = np.array(reference("invariance_2x2.json")["w"])
+    structure = Structure.time_major(4, 2, [len(w) - 2])
+    p = structure.params_from_series([w])
+    result = slra(p, structure, 10)
+    assert result.converged and ("Newton" in result.message or "machine precision" in result.message)
+    again = slra(p, structure, 10, R0=result.R)
+    assert again.iterations <= 2 and again.misfit == pytest.approx(result.misfit, rel=1e-9)
+
+
+def test_new_chart_re_evaluates_the_state():
+    # ballbeam takes a new chart after 11 iterations; with the state of the old chart kept, the
+    # gradient was wrong there and the solver stopped at 2.597e-3 (a regression test)
+    w, m, p_out, ell = daisy("ballbeam")
+    structure = Structure.time_major(w.shape[1], ell, [len(w) - ell])
+    result = slra(structure.params_from_series([w]), structure, (ell + 1) * w.shape[1] - p_out)
+    assert result.converged and result.iterations <= 50
+    assert result.misfit <= 2.4313738e-3  # the reference: 2.43137e-3 (6 digits)
+
+
+def test_geodesic_acceleration_on_a_creeping_problem():
+    # two short trajectories with a fixed zero initial condition (03-examples.md): without the
+    # acceleration the solver creeps and needs 227 iterations to the same minimum; the former stopping
+    # rule (small damped step) stopped it, "converged", at 2.016 after 21 iterations
+    from ident import ident
+    from ident.representations import random_system, simulate as simulate_system
+    rng = np.random.default_rng(3)
+    true_siso = random_system(1, 1, 3, rng)
+    trajectories = []
+    for n_samples in (30, 50):
+        u = rng.standard_normal((n_samples, 1))
+        trajectories.append(np.hstack([u, simulate_system(true_siso, u)]))
+    noisy = []
+    for w0 in trajectories:
+        noise = rng.standard_normal(w0.shape)
+        noisy.append(w0 + 0.2 * np.linalg.norm(w0) * noise / np.linalg.norm(noise))
+    _, info, _, _ = ident(noisy, 1, 3, wini=0)
+    assert info.converged and info.iter <= 60
+    assert info.M <= 2.0002795
+
+
+
+def test_factor_through_a_stationary_prefix_matches_the_full_factorisation(monkeypatch):
+    rng = np.random.default_rng(10)
+    w = simulate(rng, 2, 2, 4, 3000) + 0.1 * rng.standard_normal((3000, 4))
+    structure = Structure.time_major(4, 2, [2998])
+    p = structure.params_from_series([w])
+    R = initial_kernel(p, structure, 10)
+    band = solver._gamma_band(solver._kernel_blocks(R, structure), structure)
+    full = solver._cholesky(band.copy())
+    factor, stationary_from = solver._cholesky(band.copy(), structure)
+    assert stationary_from[0] is not None and stationary_from[0] < solver._PREFIX_BLOCKS
+    assert np.abs(factor - full).max() < 1e-12 * np.abs(full).max()
+    problem = solver._Problem(p, structure)
+    cost = problem.evaluate(R).cost
+    monkeypatch.setattr(solver, "_STAT_TOL", -1.0)  # no prefix: the series is factored in full
+    assert problem.evaluate(R).stationary_from == [None]
+    assert problem.evaluate(R).cost == pytest.approx(cost, rel=1e-12)
