@@ -494,3 +494,16 @@ def test_factor_through_a_stationary_prefix_matches_the_full_factorisation(monke
     monkeypatch.setattr(solver, "_STAT_TOL", -1.0)  # no prefix: the series is factored in full
     assert problem.evaluate(R).stationary_from == [None]
     assert problem.evaluate(R).cost == pytest.approx(cost, rel=1e-12)
+
+
+def test_a_kernel_with_an_inaccurate_cost_is_infeasible():
+    # two nearly equal rows: Gamma is nearly singular. At 1e-6 its diagonal still passes the
+    # conditioning estimate, but ||L^-1 r||^2 and 2 r^T y - ||Delta p||^2_W disagree by more than 1e-5
+    rng = np.random.default_rng(11)
+    structure = Structure.time_major(4, 2, [500])
+    p = rng.standard_normal(structure.n_params)
+    r = rng.standard_normal(12)
+    M, _ = kernel_misfit(p, structure, np.vstack([r, r + 1e-4 * rng.standard_normal(12)]))
+    assert np.isfinite(M)
+    with pytest.raises(InfeasibleKernelError, match="accurate cost"):
+        kernel_misfit(p, structure, np.vstack([r, r + 1e-6 * rng.standard_normal(12)]))
