@@ -4,10 +4,10 @@ Data: a random stable system with 2 inputs and 2 outputs of order 4 (q = 4, lag 
 3 * 4 - 2 = 10, 20 parameters), an exact trajectory plus noise of standard deviation 0.1 on all
 variables. Per T: iterations, cost evaluations, solver seconds, seconds per iteration (solver time /
 iterations, start-up and rejected trials included), the time of one Gauss-Newton matrix ("jac") and
-of one cost evaluation at the solution, the tracemalloc peak of the solver call and the process's
-peak resident memory. Each T runs in its own process, so that the peak memory is per T; the
-tracemalloc peak slows the solver itself down (by about 2.5x at T = 1e6), so the solver time is
-measured again with tracemalloc off.
+of one cost evaluation at the solution (band, Cholesky, two solves, the adjoint), the tracemalloc
+peak of the solver call and the process's peak resident memory. Each T runs in its own process, so
+that the peak memory is per T; the tracemalloc peak slows the solver itself down (by about 2.5x at
+T = 1e6), so the solver time is measured again with tracemalloc off.
 
 Usage: python benchmarks/bench_scaling.py [T ...] [--jacobian=projection|true] [--maxiter=N]
 """
