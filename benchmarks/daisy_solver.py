@@ -12,7 +12,6 @@ Usage: python benchmarks/daisy_solver.py [MAXITER] [--jacobian=projection|true] 
 """
 import math
 import sys
-import tomllib
 import warnings
 from pathlib import Path
 
@@ -49,12 +48,12 @@ def reference_tolerance(value):
 
 def load(name):
     """Identification part of one set: (w, m, p, ell)."""
-    meta = tomllib.loads((DAISY / "datasets.toml").read_text())[name]
-    data = np.loadtxt(DAISY / meta["file"])
-    columns = [slice(*map(int, meta[key].split(":"))) for key in ("inputs", "outputs")]
-    w = np.hstack([data[:, c] for c in columns])
+    from ident import daisy as daisy_sets
+    meta = daisy_sets.dataset(name)
+    u, y = daisy_sets.load(name, DAISY, download_missing=False)
+    w = np.hstack([u, y])
     w = w - w.mean(axis=0)
-    return w[: math.ceil(0.7 * len(w))], meta["m"], meta["p"], meta["ell"]
+    return w[: math.ceil(0.7 * len(w))], meta.m, meta.p, meta.ell
 
 
 def run(name, maxiter=100, jacobian="projection", secant=None):

@@ -8,7 +8,6 @@ skipped when that folder is missing.
 import importlib
 import json
 import math
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -37,12 +36,12 @@ def daisy(name):
     """Identification part of a DAISY set as in Table 1: (w, m, p, ell), or a skip."""
     if not (DAISY / "datasets.toml").is_file():
         pytest.skip(f"DAISY data not found in {DAISY} (the shared folder beside the project is missing)")
-    meta = tomllib.loads((DAISY / "datasets.toml").read_text())[name]
-    data = np.loadtxt(DAISY / meta["file"])
-    columns = [slice(*map(int, meta[key].split(":"))) for key in ("inputs", "outputs")]
-    w = np.hstack([data[:, c] for c in columns])
+    from ident import daisy as daisy_sets
+    meta = daisy_sets.dataset(name)
+    u, y = daisy_sets.load(name, DAISY, download_missing=False)
+    w = np.hstack([u, y])
     w = w - w.mean(axis=0)
-    return w[: math.ceil(0.7 * len(w))], meta["m"], meta["p"], meta["ell"]
+    return w[: math.ceil(0.7 * len(w))], meta.m, meta.p, meta.ell
 
 
 # --------------------------------------------------------------------------------------- helpers
