@@ -108,6 +108,15 @@ def test_the_module_runs_as_a_program_without_traceback(tmp_path):
     assert done.returncode == 2 and done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
 
 
+
+@pytest.mark.parametrize("argv0, prog", [("/usr/local/bin/ident", "ident"), ("C:\\env\\Scripts\\ident.exe", "ident"),
+                                         ("/x/ident/__main__.py", "python -m ident")])
+def test_help_names_the_program_as_started(monkeypatch, capsys, argv0, prog):
+    from ident.__main__ import main as program
+    monkeypatch.setattr(sys, "argv", [argv0.replace("\\", "/")])
+    assert program(["identify", "--help"]) == 0
+    assert capsys.readouterr().out.startswith(f"usage: {prog} identify")
+
 def test_lag_on_a_csv_file(data_csv, tmp_path, capsys):
     plot = tmp_path / "lag.png"
     status, out, err = run(["lag", data_csv, "--inputs", "0:2", "--outputs", "y", "--lags", "1-3", "--modes", "oe",

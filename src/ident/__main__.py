@@ -4,6 +4,7 @@
 """Command line of ident: ``python -m ident`` (or the ``ident`` console script)."""
 from __future__ import annotations
 
+import os
 import sys
 
 import numpy as np
@@ -42,8 +43,13 @@ def demo(seed: int = 1, n_samples: int = 100) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line: the subcommands of `ident.cli` and `demo`."""
-    parser = build_parser()
+    """Run the command line: the subcommands of `ident.cli` and `demo`.
+
+    Help and error messages name the program as it was started: ``ident`` for the console script,
+    ``python -m ident`` otherwise.
+    """
+    started_as = os.path.splitext(os.path.basename(sys.argv[0] if sys.argv else ""))[0]
+    parser = build_parser(prog="ident" if started_as == "ident" else "python -m ident")
     demo_parser = parser.commands.add_parser("demo", help="recover a small system from the kernel of its Hankel matrix")
     demo_parser.add_argument("--seed", type=int, default=1, help="seed of the random system and input")
     demo_parser.set_defaults(handler=lambda args: print(demo(seed=args.seed)) or 0)
