@@ -443,7 +443,8 @@ def test_delayed_products_match_direct_sums():
     delays = np.array([0, 1, 3])
     for n in (2, 10):  # shorter and longer than max_delay
         extended = rng.standard_normal((n_base, (max_delay + n) * n_eqs))
-        products = solver._delayed_products(extended, delays, max_delay, n, n_eqs)
+        products = solver._delayed_products(extended[:, : max_delay * n_eqs], extended[:, max_delay * n_eqs:],
+                                            delays, max_delay, n, n_eqs)
         blocks = extended.reshape(n_base, max_delay + n, n_eqs)
         for i1, d1 in enumerate(delays):
             for i2, d2 in enumerate(delays):
