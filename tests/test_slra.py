@@ -379,8 +379,7 @@ def printed_upper_bound(printed):
 
 
 DAISY_SETS = ["erie", "destill", "heating_system", "dryer2", "dryer", "ballbeam", "flutter", "robot_arm",
-              pytest.param("glassfurnace", marks=pytest.mark.xfail(
-                  strict=True, reason="needs 75 iterations (measured 2026-11-22): the bar of 50 is not met")),
+              "glassfurnace",
               "thermic_res_wall", "pHdata", "CD_player_arm", "winding", "exchanger", "evaporator", "cstr",
               "steamgen"]
 
@@ -515,7 +514,7 @@ def test_geodesic_acceleration_on_a_creeping_problem():
         noise = rng.standard_normal(w0.shape)
         noisy.append(w0 + 0.2 * np.linalg.norm(w0) * noise / np.linalg.norm(noise))
     _, info, _, _ = ident(noisy, 1, 3, wini=0)
-    assert info.converged and info.iter <= 60
+    assert info.converged and info.iter <= 45  # measured: 33 (57 before the damping recovery)
     assert info.M <= 2.0002795
 
 
