@@ -548,3 +548,21 @@ def test_a_kernel_with_an_inaccurate_cost_is_infeasible():
     assert np.isfinite(M)
     with pytest.raises(InfeasibleKernelError, match="accurate cost"):
         kernel_misfit(p, structure, np.vstack([r, r + 1e-6 * rng.standard_normal(12)]))
+
+
+# ------------------------------------------------------- BLAS threads
+def test_blas_runs_on_one_thread_inside_the_solver_and_the_callers_setting_returns():
+    import threadpoolctl
+    from ident.slra import _one_blas_thread
+
+    def blas_threads():
+        return [pool["num_threads"] for pool in threadpoolctl.threadpool_info() if pool["user_api"] == "blas"]
+
+    before = blas_threads()
+    with _one_blas_thread():
+        assert blas_threads() and set(blas_threads()) == {1}
+    assert blas_threads() == before
+    rng = np.random.default_rng(0)
+    structure = Structure.time_major(2, 1, [30])
+    slra(rng.standard_normal(structure.n_params), structure, 3)
+    assert blas_threads() == before
