@@ -5,6 +5,7 @@ with the banded implementation. Data from the original implementation's referenc
 from ``../shared`` beside the project (never copied into the repository); tests that need them are
 skipped when that folder is missing.
 """
+import dataclasses
 import importlib
 import json
 import math
@@ -535,6 +536,40 @@ def test_factor_through_a_stationary_prefix_matches_the_full_factorisation(monke
     monkeypatch.setattr(solver, "_STAT_TOL", -1.0)  # no prefix: the series is factored in full
     assert problem.evaluate(R).stationary_from == [None]
     assert problem.evaluate(R).cost == pytest.approx(cost, rel=1e-12)
+
+
+def test_a_stationary_series_is_filled_in_only_where_read(monkeypatch):
+    # evaluate() leaves the band past the prefix unfilled; every consumer fills what it reads. Poison
+    # that part of the band with NaN: the results must still be those of the fully filled factor.
+    rng = np.random.default_rng(12)
+    w = simulate(rng, 2, 2, 4, 6000) + 0.1 * rng.standard_normal((6000, 4))
+    structure = Structure.time_major(4, 2, [5998])
+    p = structure.params_from_series([w])
+    R = initial_kernel(p, structure, 10)
+    n_eqs, free = R.shape[0], solver._Chart.from_kernel(R).free_columns
+    full, _ = solver._cholesky(solver._gamma_band(solver._kernel_blocks(R, structure), structure), structure)
+    gamma_band = solver._gamma_band
+
+    def poisoned_band(kernel_blocks, structure, prefix_only=False):
+        band = gamma_band(kernel_blocks, structure, prefix_only)
+        if prefix_only:
+            band[:, solver._PREFIX_BLOCKS * n_eqs:] = np.nan
+        return band
+
+    monkeypatch.setattr(solver, "_gamma_band", poisoned_band)
+    problem = solver._Problem(p, structure)
+    lazy = problem.evaluate(R)
+    assert lazy.stationary_parts[0] is not None and np.isnan(lazy.factor).any()
+    results = [*problem.normal_equations_projection(lazy, free),
+               problem.jacobian_transpose_product(lazy, free, problem.correction_residual(lazy))]
+    eager = dataclasses.replace(lazy, factor=full.copy())
+    expected = [*problem.normal_equations_projection(eager, free),
+                problem.jacobian_transpose_product(eager, free, problem.correction_residual(eager))]
+    for got, want in zip(results, expected):
+        assert np.array_equal(got, want)
+    jtj, half_gradient, _ = problem.normal_equations_true(lazy, free)  # fills the whole series
+    assert np.array_equal(lazy.factor, full)
+    assert np.array_equal(jtj, problem.normal_equations_true(eager, free)[0])
 
 
 def test_a_kernel_with_an_inaccurate_cost_is_infeasible():
