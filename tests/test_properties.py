@@ -48,12 +48,16 @@ def test_optimal_misfit_is_invariant_to_permuting_the_variables(model_class, see
     m, p, ell = model_class
     _, w, _ = data(m, p, ell, seed, noise=0.1)
     q = m + p
-    _, info, _, _ = ident(w, m, ell)
+    # the property is about the optimal misfit: the first run must reach a minimum. Some small
+    # problems creep for more than the default 100 iterations (autonomous, m = 0, p = 2, ell = 2,
+    # seed 364: 112), so the limit is raised and convergence asserted
+    _, info, _, _ = ident(w, m, ell, maxiter=500)
+    assert info.converged, info.message
     perm = list(range(q))
     random.shuffle(perm)
     # the same model in the permuted variables: permute the kernel's columns within each lag block
     R0 = info.Rh.reshape(p, ell + 1, q)[:, :, perm].reshape(p, (ell + 1) * q)
-    _, info_perm, _, _ = ident(w[:, perm], m, ell, sys0=R0)
+    _, info_perm, _, _ = ident(w[:, perm], m, ell, sys0=R0, maxiter=500)
     assert info_perm.M == pytest.approx(info.M, rel=1e-6, abs=1e-12)
 
 
