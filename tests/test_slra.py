@@ -519,13 +519,18 @@ def test_geodesic_acceleration_on_a_creeping_problem():
     assert info.M <= 2.0002795
 
 
+def long_noisy_problem(seed, n_samples):
+    """A 2 x 2 lag-2 trajectory plus noise 0.1, long enough for a stationary factor: structure, p and
+    the default initial kernel."""
+    rng = np.random.default_rng(seed)
+    w = simulate(rng, 2, 2, 4, n_samples) + 0.1 * rng.standard_normal((n_samples, 4))
+    structure = Structure.time_major(4, 2, [n_samples - 2])
+    p = structure.params_from_series([w])
+    return structure, p, initial_kernel(p, structure, 10)
+
 
 def test_factor_through_a_stationary_prefix_matches_the_full_factorisation(monkeypatch):
-    rng = np.random.default_rng(10)
-    w = simulate(rng, 2, 2, 4, 3000) + 0.1 * rng.standard_normal((3000, 4))
-    structure = Structure.time_major(4, 2, [2998])
-    p = structure.params_from_series([w])
-    R = initial_kernel(p, structure, 10)
+    structure, p, R = long_noisy_problem(seed=10, n_samples=3000)
     band = solver._gamma_band(solver._kernel_blocks(R, structure), structure)
     full = solver._cholesky(band.copy())
     factor, stationary_from = solver._cholesky(band.copy(), structure)
@@ -541,11 +546,7 @@ def test_factor_through_a_stationary_prefix_matches_the_full_factorisation(monke
 def test_a_stationary_series_is_filled_in_only_where_read(monkeypatch):
     # evaluate() leaves the band past the prefix unfilled; every consumer fills what it reads. Poison
     # that part of the band with NaN: the results must still be those of the fully filled factor.
-    rng = np.random.default_rng(12)
-    w = simulate(rng, 2, 2, 4, 6000) + 0.1 * rng.standard_normal((6000, 4))
-    structure = Structure.time_major(4, 2, [5998])
-    p = structure.params_from_series([w])
-    R = initial_kernel(p, structure, 10)
+    structure, p, R = long_noisy_problem(seed=12, n_samples=6000)
     n_eqs, free = R.shape[0], solver._Chart.from_kernel(R).free_columns
     full, _ = solver._cholesky(solver._gamma_band(solver._kernel_blocks(R, structure), structure), structure)
     gamma_band = solver._gamma_band
