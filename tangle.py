@@ -18,9 +18,9 @@ Usage::
     python tangle.py            # write every root chunk to its file
     python tangle.py --check    # exit 1 and name each file that differs from the literate sources
     python tangle.py --where src/ident/hankel.py:42   # which literate line produced that line
-    python tangle.py weave      # write the woven document docs/ (weave.py; needs the docs extra)
 
-Standard library only: the tangler must run before anything is installed.
+Standard library only: the tangler must run before anything is installed.  The woven document is
+written by ``python weave.py``, which imports this module (this module never imports it).
 """
 from __future__ import annotations
 
@@ -352,11 +352,9 @@ def where(root: Path, target: str) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    if argv[:1] == ["weave"]:  # imported only here: the weave needs more than the standard library
-        sys.path.insert(0, str(Path(__file__).resolve().parent))
-        import weave
-
-        return weave.main(argv[1:])
+    if argv[:1] == ["weave"]:
+        print("tangle.py: error: the weave is its own program now: python weave.py", file=sys.stderr)
+        return 2
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--check", action="store_true",
                         help="write nothing; exit 1 if a generated file differs from the literate sources")

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Weave the literate sources of ident (``literate/*.md``) into a browsable document in ``docs/``.
 
-``python tangle.py weave`` (or ``python weave.py``) writes, from the documents that ``tangle.py``
+``python weave.py`` writes, from the documents that ``tangle.py``
 reads:
 
 * one HTML page per literate document and ``index.html`` with the contents, an index of the
@@ -25,9 +25,9 @@ times.
 
 Usage::
 
-    python tangle.py weave                  # write docs/
-    python tangle.py weave --out /tmp/docs  # somewhere else
-    python tangle.py weave --no-notebooks   # pages only
+    python weave.py                  # write docs/
+    python weave.py --out /tmp/docs  # somewhere else
+    python weave.py --no-notebooks   # pages only
 
 Needs markdown-it-py, mdit-py-plugins, latex2mathml, Pygments, matplotlib and jupytext (the
 ``docs`` extra of the package).
@@ -895,7 +895,7 @@ class Weave:
         if pages:
             bar += f' <a href="{pages[0].file}">start reading →</a>'
         footer = ("Woven from <code>literate/</code> by <code>weave.py</code> "
-                  "(<code>python tangle.py weave</code>).")
+                  "(<code>python weave.py</code>).")
         return self.frame("ident: the literate program", bar, "\n".join(parts) + "\n", footer)
 
     def chunk_index_html(self) -> str:
@@ -1052,7 +1052,7 @@ class Weave:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python tangle.py weave", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="python weave.py", description=__doc__.split("\n\n")[0])
     default_root = Path(__file__).resolve().parent
     parser.add_argument("--root", type=Path, default=default_root,
                         help="project root holding literate/ (default: this file's folder)")

@@ -106,7 +106,7 @@ def chromium(args: list[str], profile: Path, timeout: float = 120) -> subprocess
 def woven(tmp_path_factory) -> Path:
     """A fresh weave of the real literate/ (pages and figures; the notebooks are not needed here)."""
     out = tmp_path_factory.mktemp("woven")
-    done = subprocess.run([sys.executable, "tangle.py", "weave", "--out", str(out), "--no-notebooks"],
+    done = subprocess.run([sys.executable, "weave.py", "--out", str(out), "--no-notebooks"],
                           cwd=PROJECT_ROOT, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, f"the weave failed:\n{done.stdout}\n{done.stderr}"
     return out

@@ -1,4 +1,4 @@
-"""The weave (``python tangle.py weave``): pages, cross references, mathematics, examples with their
+"""The weave (``python weave.py``): pages, cross references, mathematics, examples with their
 output and figures, notebooks, failures that name the literate line, and a weave that gives the same
 files twice apart from measured times.
 
@@ -273,7 +273,7 @@ def test_a_failing_example_stops_the_weave_with_its_location(tmp_path, capsys) -
     broken = FIRST.replace('print(shared + 1)', 'print(shared + 1)\nraise ValueError("boom")')
     root = make_project(tmp_path / "project", first=broken)
     line = broken.splitlines().index('raise ValueError("boom")') + 1
-    status = tangle.main(["weave", "--root", str(root), "--out", str(tmp_path / "out")])
+    status = weave.main(["--root", str(root), "--out", str(tmp_path / "out")])
     error = capsys.readouterr().err
     assert status == 1
     assert "literate/01-first.md:" in error and "example 'binds a figure and uses the namespace' failed" in error
@@ -283,7 +283,7 @@ def test_a_failing_example_stops_the_weave_with_its_location(tmp_path, capsys) -
 
 def test_unknown_latex_is_reported_with_its_line(tmp_path, capsys) -> None:
     root = make_project(tmp_path / "project", first=FIRST.replace("$a_1 + \\hat w$", "$\\nosuchmacro{x}$"))
-    assert tangle.main(["weave", "--root", str(root), "--out", str(tmp_path / "out")]) == 0
+    assert weave.main(["--root", str(root), "--out", str(tmp_path / "out")]) == 0
     assert "literate/01-first.md:3: warning: cannot convert $\\nosuchmacro{x}$" in capsys.readouterr().err
     assert '<code class="math-error">\\nosuchmacro{x}</code>' in read(tmp_path / "out", "01-first.html")
 
@@ -327,7 +327,7 @@ def test_png_metadata_is_removed() -> None:
 
 
 def weave_real(out: Path) -> subprocess.CompletedProcess:
-    done = subprocess.run([sys.executable, "tangle.py", "weave", "--out", str(out)], cwd=PROJECT_ROOT,
+    done = subprocess.run([sys.executable, "weave.py", "--out", str(out)], cwd=PROJECT_ROOT,
                           capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, f"the weave failed:\n{done.stdout}\n{done.stderr}"
     return done
