@@ -257,16 +257,6 @@ def test_split_centred():
     assert np.allclose(np.vstack([w_identification, w_validation]).mean(axis=0), 0)
 
 
-def test_least_squares_kernel_recovers_an_exact_arx_system():
-    rng = np.random.default_rng(0)
-    u = rng.standard_normal(100)
-    y = np.zeros(100)
-    for t in range(98):
-        y[t + 2] = 1.2 * y[t + 1] - 0.5 * y[t] + 0.7 * u[t + 1] + 0.2 * u[t]
-    R = daisy.least_squares_kernel(np.column_stack([u, y]), 1, 2)
-    assert np.allclose(R, [[0.2, -0.5, 0.7, 1.2, 0.0, -1.0]], atol=1e-10)
-
-
 def test_runner_on_two_small_sets(shared, tmp_path):
     progress = io.StringIO()
     results = daisy.run_benchmark(["erie", "robot_arm"], directory=shared, download_missing=False,

@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ident.slra import InfeasibleKernelError, SLRAWarning, initial_kernel, kernel_misfit, slra
+from ident.slra import InfeasibleKernelError, SLRAWarning, kernel_misfit, slra
+from ident.starts import unstructured_lra as initial_kernel
 from ident.structure import Structure, series_to_parameters
 
 # the module itself: the package exports the function slra under the same name as the module
