@@ -11,7 +11,7 @@ import pytest
 
 from ident import ident, misfit
 from ident.representations import random_system
-from ident.slra import kernel_misfit, slra
+from ident.solver import kernel_misfit, slra
 from ident.structure import Structure
 
 RNG = np.random.default_rng(0)
