@@ -461,6 +461,35 @@ class Outcome:
         return self.status == "ok"
 
 
+def run_order(document: tangle.Document) -> list:
+    """The examples and inline values of a document in the order they run: reading order, except
+    that an inline value that reads a name no example above it binds runs right after the example
+    below it that binds the last such name (the text may state a result before the example that
+    computes it)."""
+    units = document.runnable()
+    binds = [module_names("\n".join(u.lines))[0] if isinstance(u, tangle.Block) else set() for u in units]
+    order, waiting, seen = [], [], set()  # waiting: [value, the names it still waits for]
+    for k, unit in enumerate(units):
+        if isinstance(unit, tangle.InlineValue):
+            try:
+                needed = module_names(unit.expression, "eval")[1]
+            except SyntaxError:
+                needed = set()  # evaluating it reports the error
+            missing = (needed - seen) & set().union(*binds[k:])
+            if missing:
+                waiting.append([unit, missing])
+            else:
+                order.append(unit)
+            continue
+        order.append(unit)
+        seen |= binds[k]
+        for entry in waiting:
+            entry[1] -= binds[k]
+        order += [value for value, missing in waiting if not missing]
+        waiting = [entry for entry in waiting if entry[1]]
+    return order + [value for value, _ in waiting]
+
+
 def unit_title(unit) -> str:
     if isinstance(unit, tangle.Block):
         return f"example '{unit.name}'"
@@ -479,7 +508,7 @@ class DocumentRun:
         self.runner = runner
         self.anchors = anchors or {}
         self.namespace: dict = {"__name__": f"example:{document.path}"}
-        self.units = document.runnable()
+        self.units = run_order(document)
         self.outcomes: list[Outcome] = []
         self.unavailable: dict[str, str] = {}  # name -> the failed unit that was to bind it
 
@@ -519,8 +548,10 @@ class DocumentRun:
                 if example and failure.line is not None:  # what ran before the failing statement stands
                     bound = module_names(source, after=failure.line - unit.body_location.line + 1)[0]
         if not outcome.ok:
-            cause = (f"{unit_title(unit)} ({unit.location})" if outcome.status == "failed"
-                     else self.unavailable[missing[0]])
+            cause = f"{unit_title(unit)} ({unit.location})"
+            if outcome.status == "skipped":
+                root = self.unavailable[missing[0]]
+                cause += f", skipped because of {root.split(', skipped because of ')[-1]},"
             self.unavailable.update((name, cause) for name in bound)
         return outcome
 

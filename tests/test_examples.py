@@ -21,7 +21,8 @@ matplotlib.use("Agg")
 weave = pytest.importorskip("weave")
 
 WEB = tangle.read_web(PROJECT_ROOT)
-UNITS = [(document, index, unit) for document in WEB.documents for index, unit in enumerate(document.runnable())]
+UNITS = [(document, index, unit) for document in WEB.documents
+         for index, unit in enumerate(weave.run_order(document))]
 RUNS: dict[str, "weave.DocumentRun"] = {}
 
 

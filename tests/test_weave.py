@@ -337,7 +337,8 @@ def test_one_failure_is_one_failure_and_its_dependents_are_skipped(tmp_path) -> 
     assert outcomes[1].value == "2"  # what ran before the failing line stands
     assert "reads c, which example 'defines a and fails' (literate/02-second.md:3) did not define" \
         in outcomes[2].message
-    assert "reads d, which example 'defines a and fails'" in outcomes[5].message
+    assert ("reads d, which example 'uses c' (literate/02-second.md:18), skipped because of example "
+            "'defines a and fails' (literate/02-second.md:3), did not define") in outcomes[5].message
     assert outcomes[6].result.stdout == "still runs\n"
     problems = run.problems()
     assert len(problems) == 4 and problems[0].startswith("literate/02-second.md:3: example 'defines a and fails'")
@@ -345,15 +346,20 @@ def test_one_failure_is_one_failure_and_its_dependents_are_skipped(tmp_path) -> 
 
 
 def test_inline_values_are_computed_in_reading_order(tmp_path) -> None:
-    text = FIRST.replace("## Examples", "## Examples\n\nBefore: `{python} 'shared' in globals()`.") + (
+    text = FIRST.replace("## Examples", "## Examples\n\nBefore: `{python} 'shared' in globals()`; the "
+                         "width of the figure below: `{python} own.get_figwidth()`.") + (
         "\nAfter: shared is `{python} shared`, twice `{python} f\"{2 * shared:.1f}\"`.\n")
     root = make_project(tmp_path / "project", first=text)
     out = tmp_path / "out"
     assert weave.main(["--root", str(root), "--out", str(out)]) == 0
     page = read(out, "01-first.html")
-    assert 'Before: <span class="computed" title="&#x27;shared&#x27; in globals()">False</span>.' in page
+    assert 'Before: <span class="computed" title="&#x27;shared&#x27; in globals()">False</span>;' in page
     assert '<span class="computed" title="shared">41</span>' in page
     assert '>82.0</span>' in page and "{python}" not in page
+    assert 'title="own.get_figwidth()">2.0</span>' in page  # run after the example that binds `own`
+    document = tangle.read_web(root).documents[0]
+    order = [getattr(u, "name", None) or u.expression for u in weave.run_order(document)]
+    assert order.index("own.get_figwidth()") == order.index("writes its own figure") + 1
     notebook = read(out, "notebooks/01-first.ipynb")
     assert "After: shared is 41, twice 82.0." in notebook
 
