@@ -11,7 +11,10 @@ a Markdown file:
   indentation applied to every included line;
 * an *example* is a fenced block ```` ```python ```` (no ``.noeval``) whose first line is
   ``# example: name``; examples are not tangled, they run as tests and as notebook cells;
-* other fenced blocks (``.noeval`` without a chunk header, other languages) are only displayed.
+* other fenced blocks (``.noeval`` without a chunk header, other languages) are only displayed;
+* an *inline value* is a code span ```{python} expression``` in the text (Quarto's form): the weave
+  replaces it by the value the expression has at that place of the document, after the examples
+  above it ran; the example tests evaluate it too.
 
 Usage::
 
@@ -44,6 +47,7 @@ CHUNK_HEADER = re.compile(r"^#\s*<<(?P<name>.+?)>>(?P<op>\+?=)\s*$")
 HEADER_LIKE = re.compile(r"^#\s*<<")
 EXAMPLE_HEADER = re.compile(r"^#\s*example:\s*(?P<name>\S.*?)\s*$")
 REFERENCE = re.compile(r"^(?P<indent>[ \t]*)<<(?P<name>.+?)>>\s*$")
+INLINE_VALUE = re.compile(r"`\{python\}[ \t]+(?P<expression>[^`]*?)[ \t]*`")
 
 
 class TangleError(Exception):
@@ -76,11 +80,53 @@ class Block:
         skip = 1 if self.kind == "display" else 2
         return Location(self.location.file, self.location.line + skip)
 
+    @property
+    def closing_line(self) -> int:
+        """The line of the closing fence."""
+        return self.body_location.line + len(self.lines)
+
+
+@dataclasses.dataclass(frozen=True)
+class InlineValue:
+    """A code span ```{python} expression``` in the text of a document."""
+
+    expression: str
+    location: Location  # the line of the text that holds it
+    start: int  # the span's columns in that line, [start, end)
+    end: int
+
 
 @dataclasses.dataclass
 class Document:
     path: str
     items: list  # str (a Markdown text line) or Block, in order
+
+    def text_lines(self):
+        """(line number, text) of each Markdown text line, outside the fenced blocks."""
+        number = 1
+        for item in self.items:
+            if isinstance(item, Block):
+                number = item.closing_line + 1
+            else:
+                yield number, item
+                number += 1
+
+    def inline_values(self) -> list[InlineValue]:
+        """The inline values of the text, in reading order."""
+        found = []
+        for number, line in self.text_lines():
+            for match in INLINE_VALUE.finditer(line):
+                location = Location(self.path, number)
+                if not match["expression"].strip():
+                    raise TangleError(f"{location}: empty inline value `{{python}} `; write `{{python}} expression`")
+                found.append(InlineValue(match["expression"].strip(), location, match.start(), match.end()))
+        return found
+
+    def runnable(self) -> list:
+        """The examples and inline values in reading order: what runs when the document is read."""
+        examples = [b for b in self.items if isinstance(b, Block) and b.kind == "example"]
+        key = lambda unit: (unit.location.line, getattr(unit, "start", -1))  # noqa: E731
+        return sorted(examples + self.inline_values(), key=key)
 
 
 def normalise_name(name: str) -> str:
