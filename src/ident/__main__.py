@@ -10,7 +10,7 @@ import sys
 import numpy as np
 
 from ident import __version__
-from ident.cli import build_parser, main as cli_main
+from ident.cli import build_parser, main as cli_main, non_negative_integer
 from ident.hankel import block_hankel
 
 
@@ -51,7 +51,8 @@ def main(argv: list[str] | None = None) -> int:
     started_as = os.path.splitext(os.path.basename(sys.argv[0] if sys.argv else ""))[0]
     parser = build_parser(prog="ident" if started_as == "ident" else "python -m ident")
     demo_parser = parser.commands.add_parser("demo", help="recover a small system from the kernel of its Hankel matrix")
-    demo_parser.add_argument("--seed", type=int, default=1, help="seed of the random system and input")
+    demo_parser.add_argument("--seed", type=non_negative_integer, default=1,
+                             help="seed of the random system and input (a non-negative integer)")
     demo_parser.set_defaults(handler=lambda args: print(demo(seed=args.seed)) or 0)
     return cli_main(argv, parser=parser)
 
