@@ -392,3 +392,20 @@ def test_scale_warning_points_at_the_callers_line() -> None:
     with pytest.warns(RuntimeWarning, match="beyond the floating-point range") as record:
         ident(1e200 * W_NOISY, 1, 1)
     assert record[0].filename == __file__, record[0].filename
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-170, 1e160, 1e300])
+def test_validation_fits_are_the_same_at_any_scale(scale) -> None:
+    from ident.representations import simulate
+    from ident.validation import fit_percent, validate
+    rng = np.random.default_rng(11)
+    u = rng.standard_normal((100, 1))
+    y = simulate(SYS, u, rng.standard_normal(2)) + 0.01 * rng.standard_normal((100, 2))
+    reference = validate(SYS, u, y)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no overflow, underflow or invalid value on the way
+        scaled = validate(SYS, scale * u, scale * y)
+        per_output, overall = fit_percent(scale * y, scale * reference.yh)
+    np.testing.assert_allclose(scaled.fit, reference.fit, rtol=1e-9)
+    np.testing.assert_allclose(per_output, reference.fit, rtol=1e-9)
+    np.testing.assert_allclose(scaled.x0 / scale, reference.x0, rtol=1e-8, atol=1e-12)

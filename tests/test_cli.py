@@ -358,3 +358,15 @@ def test_daisy_results_are_replaced_all_or_nothing(tmp_path, monkeypatch):
     with pytest.raises(OSError):
         daisy.write_results(results, folder)
     assert {p.name: p.read_bytes() for p in folder.iterdir()} == before
+
+
+def test_identify_data_at_an_extreme_scale(data_csv, tmp_path, capsys):
+    table = np.loadtxt(data_csv, delimiter=",", skiprows=1)
+    np.savetxt(data_csv, 1e200 * table, delimiter=",", header="u1,u2,y", comments="")
+    model = tmp_path / "m.json"
+    status, out, err = run(["identify", data_csv, "--inputs", "u1,u2", "--outputs", "y", "--lag", 2,
+                            "--exact", "inputs", "--model", model, "--plot", tmp_path / "fit.png"], capsys)
+    assert status == 0, err
+    saved = json.loads(model.read_text())  # valid JSON: an overflowing misfit is null, not Infinity
+    assert saved["misfit"] is None and saved["fit"] > 95
+    assert "warning: ident: the misfit" in out and "beyond the floating-point range" in out

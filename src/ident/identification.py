@@ -261,9 +261,9 @@ def check_inputs_present(series, m: int) -> None:
 
 
 # <<scale of the data>>= literate/08-identification.md:323
-def scale_exponent(series, initial) -> int:
-    """e with 2**(e-1) <= max |w| < 2**e over the data and the given initial conditions (0 if all zero)."""
-    largest = max(float(np.max(np.abs(w))) for w in [*series, *(w0 for w0 in initial if w0 is not None and w0.size)])
+def scale_exponent(arrays) -> int:
+    """e with 2**(e-1) <= max |x| < 2**e over the arrays (None and empty ones skipped; 0 if all zero)."""
+    largest = max([float(np.max(np.abs(x))) for x in arrays if x is not None and x.size] + [0.0])
     return int(np.frexp(largest)[1]) if largest > 0 else 0
 
 
@@ -426,7 +426,7 @@ def ident(w, m: int, ell: int, *, exct=None, wini=None, sys0=None, maxiter: int 
     rank = identification_rank(series, initial, m, ell)
     kernel0 = initial_kernel_from(sys0, m, ell, n_vars)
     check_inputs_present(series, m)
-    exponent = scale_exponent(series, initial)
+    exponent = scale_exponent([*series, *initial])
     problem = identification_problem(scaled(series, -exponent), ell, exact, scaled(initial, -exponent))
     if disp in ("iter", "final") and exponent:
         print(f"ident: the solver works on w scaled by 2**{-exponent}; its misfits are in those units")
