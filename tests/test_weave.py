@@ -364,6 +364,20 @@ def test_inline_values_are_computed_in_reading_order(tmp_path) -> None:
     assert "After: shared is 41, twice 82.0." in notebook
 
 
+def test_a_value_of_several_lines_is_markdown_of_its_own(tmp_path, capsys) -> None:
+    table = "\n\n`{python} '| a | b |\\n|---|---|\\n| 1 | $x^2$ |'`\n\nAfter the table.\n"
+    root = make_project(tmp_path / "project", first=FIRST + table)
+    out = tmp_path / "out"
+    assert weave.main(["--root", str(root), "--out", str(out)]) == 0
+    page = read(out, "01-first.html")
+    assert '<div class="computed" title="&#x27;| a | b |' in page and "<table>" in page.split("After the table")[0]
+    assert "<td>1</td>" in page and page.count("<math ") == 5  # the formula in the table is MathML too
+    inline = FIRST + "\nIn a sentence: `{python} 'two\\nlines'`.\n"
+    (root / "literate" / "01-first.md").write_text(inline, encoding="utf-8")
+    assert weave.main(["--root", str(root), "--out", str(out)]) == 1
+    assert "must stand alone on its line" in capsys.readouterr().err
+
+
 def test_a_failing_inline_value_is_reported_with_its_line(tmp_path, capsys) -> None:
     root = make_project(tmp_path / "project", first=FIRST + "\nA value: `{python} undefined_name`.\n")
     line = (FIRST + "\nA value: `{python} undefined_name`.\n").splitlines().index("A value: `{python} undefined_name`.") + 1
