@@ -18,8 +18,9 @@ working directory and ``IDENT_FIGURES`` naming ``docs/figures``.  Under each exa
 what it printed and its figures: files the example wrote into ``$IDENT_FIGURES``; or, if it wrote
 none, the matplotlib figures it left open in pyplot and the ``matplotlib.figure.Figure`` objects it
 bound to new top-level names.  An *inline value* ```{python} expression``` in the text is replaced
-by the expression's value at that place of the document (after the examples above it ran), inside a
-span whose title shows the expression.
+by the expression's value at that place of the document (after the examples above it ran; or after
+the example below that defines a name it reads), inside a span whose title shows the expression; a
+value of several lines that stands alone on its line is rendered as Markdown of its own (a table).
 
 The weave is all or nothing.  It writes into a new folder beside the output folder and moves the
 files into the output folder only when every example and inline value ran; files it did not write
@@ -69,7 +70,9 @@ MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".gif"
         ".svg": "image/svg+xml", ".webp": "image/webp"}
 TEXT_COLUMNS = 88  # characters of code that fit in the text column (45rem at the CSS below)
 TEXT_WIDTH_PX = 720  # the text column in CSS pixels; a wider figure widens its example
+CAPTION = re.compile(r"^\s*#\s*caption:\s*(?P<caption>\S.*?)\s*$")  # in an example: its figure's caption
 PLACEHOLDER = "WEAVEREF{}X"
+BLOCK_PLACEHOLDER = "WEAVEVALUE{}X"
 PLACEHOLDER_HTML = re.compile(r'<span class="[^"]*">WEAVEREF(\d+)X</span>|WEAVEREF(\d+)X')
 
 
@@ -306,18 +309,21 @@ class ExampleRunner:
             result.figures.append(self.save(figure, name))
         return result
 
-    def evaluate(self, value: tangle.InlineValue, namespace: dict) -> str:
-        """The text of an inline value: ``str`` of the expression's value, on one line."""
+    def evaluate(self, value: tangle.InlineValue, namespace: dict, alone: bool) -> str:
+        """The text of an inline value: ``str`` of the expression's value, Markdown; several lines
+        (a table, a list) only for a value that stands alone on its line."""
         source = "\n" * (value.location.line - 1) + value.expression
         try:
             code = compile(source, str(self.root / value.location.file), "eval")
-            text = str(eval(code, namespace))
+            text = str(eval(code, namespace)).strip("\n")
         except Exception as error:
             trace = "".join(traceback.format_exception(type(error), error, error.__traceback__.tb_next))
             raise ExampleFailure(trace.rstrip()) from None
-        if "\n" in text or "`" in text:
-            raise ExampleFailure(f"its value {text!r} holds a line break or a backtick; an inline value "
-                                 "must be one line of Markdown text")
+        if "\n" in text and not alone:
+            raise ExampleFailure(f"its value has several lines ({text[:60]!r}...); a value of several lines "
+                                 "(a table, a list) must stand alone on its line of the text")
+        if "`{python}" in text:
+            raise ExampleFailure("its value holds an inline value itself")
         return text
 
     def clean(self, text: str) -> str:
@@ -509,6 +515,7 @@ class DocumentRun:
         self.anchors = anchors or {}
         self.namespace: dict = {"__name__": f"example:{document.path}"}
         self.units = run_order(document)
+        self.lines = dict(document.text_lines())
         self.outcomes: list[Outcome] = []
         self.unavailable: dict[str, str] = {}  # name -> the failed unit that was to bind it
 
@@ -542,7 +549,9 @@ class DocumentRun:
                     base = Path(self.document.path).stem + "-" + self.anchor(unit)
                     outcome = Outcome("ok", result=self.runner.run(unit, self.namespace, base))
                 else:
-                    outcome = Outcome("ok", value=self.runner.evaluate(unit, self.namespace))
+                    line = self.lines[unit.location.line]
+                    alone = line.strip() == line[unit.start:unit.end]
+                    outcome = Outcome("ok", value=self.runner.evaluate(unit, self.namespace, alone))
             except ExampleFailure as failure:
                 outcome = Outcome("failed", str(failure))
                 if example and failure.line is not None:  # what ran before the failing statement stands
@@ -682,6 +691,7 @@ class PageRenderer:
         self.formatter = HtmlFormatter(nowrap=True)
         self.blocks = {b.location.line: b for b in document.items if isinstance(b, tangle.Block)}
         self.rendered: set[int] = set()
+        self.figure_count = 0  # figures on the page so far
         self.md = make_markdown()
         rules = self.md.renderer.rules  # bound methods: add_render_rule would rebind them to the renderer
         rules["fence"] = self.render_fence
@@ -819,21 +829,28 @@ class PageRenderer:
             if result.stderr:
                 parts.append(f'<pre class="output stderr" aria-label="standard error">'
                              f'{html.escape(result.stderr.rstrip())}</pre>')
-            for k, figure in enumerate(result.figures, start=1):
-                parts.append(self.render_figure(figure, f"Figure {k} of the example “{block.name}”"))
+            captions = [match["caption"] for match in map(CAPTION.match, block.lines) if match]
+            for k, figure in enumerate(result.figures):
+                self.figure_count += 1
+                caption = captions[k] if k < len(captions) else block.name
+                parts.append(self.render_figure(figure, self.figure_count, caption))
         parts.append("</div>")
         return "\n".join(parts) + "\n"
 
-    def render_figure(self, figure: Figure, caption: str) -> str:
+    def render_figure(self, figure: Figure, number: int, caption: str) -> str:
+        """A figure with its number on the page and its caption (Markdown, from ``# caption:``)."""
         source = html.escape(figure.path)
         if Path(figure.path).suffix.lower() not in IMAGE_SUFFIXES:
             return f'<p class="figure-link"><a href="{source}">{html.escape(Path(figure.path).name)}</a></p>'
         size = f' width="{figure.width}" height="{figure.height}"' if figure.width and figure.height else ""
-        return (f'<figure class="example-figure"><a href="{source}"><img src="{source}"{size} '
-                f'alt="{html.escape(caption)}"></a><figcaption>{html.escape(caption)}</figcaption></figure>')
+        text = self.md.renderInline(caption)
+        alt = re.sub(r"<[^>]+>", "", text)
+        return (f'<figure class="example-figure" id="figure-{number}"><a href="{source}"><img src="{source}"{size} '
+                f'alt="{html.escape(alt)}"></a><figcaption><span class="figure-number">Figure {number}.</span> '
+                f"{text}</figcaption></figure>")
 
     def render(self) -> "Page":
-        text = self.weave.text_with_values(self.document.path, marked=True)
+        text, values = self.weave.text_with_values(self.document.path, marked=True)
         env: dict = {}
         tokens = self.md.parse(text, env)
         for token in tokens:  # inline tokens have no line of their own: give them their block's
@@ -849,13 +866,23 @@ class PageRenderer:
         title_end = next((k for k, t in enumerate(tokens) if t.type == "heading_close" and t.tag == "h1"), -1)
         head = self.md.renderer.render(tokens[:title_end + 1], self.md.options, env)
         body = self.md.renderer.render(tokens[title_end + 1:], self.md.options, env)
+        for k, (expression, value) in enumerate(values):  # values of several lines, rendered as Markdown
+            placeholder = f"<p>{BLOCK_PLACEHOLDER.format(k)}</p>"
+            if placeholder not in body:
+                raise WeaveError(f"{self.document.path}: the value of `{{python}} {expression}` has several "
+                                 "lines; give it a paragraph of its own (blank lines before and after)")
+            body = body.replace(placeholder, f'<div class="computed" title="{html.escape(expression)}">\n'
+                                             f"{self.md.render(value)}</div>")
         missing = [b for line, b in self.blocks.items() if b.kind != "display" and line not in self.rendered]
         if missing:
             raise WeaveError(f"{missing[0].location}: the Markdown parser did not read this {missing[0].kind} "
                              "as a fenced code block; start its fence at column 0 outside lists and quotes")
         title = next((plain for level, _, _, plain in headings if level == 1), Path(self.page).stem)
         headings = [(level, anchor, label) for level, anchor, label, _ in headings]
-        return Page(self.document, self.page, title, headings, head, body)
+        first_section = next((k for k, t in enumerate(tokens) if k > title_end and t.type == "heading_open"
+                              and t.tag == "h2"), len(tokens))
+        front = self.md.renderer.render(tokens[title_end + 1:first_section], self.md.options, env)
+        return Page(self.document, self.page, title, headings, head, body, front)
 
 
 def wide(lines: list[str]) -> str:
@@ -891,6 +918,7 @@ class Page:
     headings: list[tuple[int, str, str]]  # level, id, label (HTML)
     head: str  # the HTML up to and including the title
     body: str
+    front: str = ""  # the HTML between the title and the first section: the abstract of the first page
 
 
 # --------------------------------------------------------------------------------------------
@@ -955,11 +983,12 @@ nav.toc ul { margin: .2em 0; padding-left: 1.2em; } nav.toc li { margin: .1em 0;
 pre.output { background: #fff; border-left: 3px solid #8c959f; border-radius: 0; max-height: 32em; }
 pre.stderr { border-left-color: #bf8700; color: #6e4b00; }
 figure { margin: .8em 0 1.2em; } figcaption { font-size: .85em; color: var(--muted); }
+.figure-number { font-weight: 600; color: var(--text); }
 ul.chunk-index { list-style: none; padding-left: 0; font-size: .95em; }
 ul.chunk-index li { margin: .15em 0; padding-left: 1.5em; text-indent: -1.5em; }
 .api-table .kind { font-size: .85em; }
 .api-table td:last-child { min-width: 12em; }
-.computed { border-bottom: 1px dotted var(--muted); }
+span.computed { border-bottom: 1px dotted var(--muted); }
 .muted, footer { color: var(--muted); }
 footer { font-size: .85em; margin-top: 3em; }
 footer p { border-top: 1px solid var(--rule); padding: .6em 0 2em; margin: 0; }
@@ -988,16 +1017,24 @@ class Weave:
         self.stems = {Path(d.path).stem for d in self.web.documents}
         self.values: dict[str, dict] = {}  # document -> (line, start, end) of an inline value -> its text
 
-    def text_with_values(self, path: str, marked: bool) -> str:
-        """A document's text with each inline value replaced by its value; ``marked``: inside a span
-        whose title is the expression, so that the page tells where a number comes from."""
+    def text_with_values(self, path: str, marked: bool) -> tuple[str, list[tuple[str, str]]]:
+        """A document's text with each inline value replaced by its value, and the values of several
+        lines.  ``marked`` (for the page): a value inside a span whose title is the expression, so
+        that the page tells where a number comes from, and a value of several lines as a placeholder
+        line (the lines of the page must stay those of the text), with its (expression, Markdown)."""
         lines = self.texts[path].replace("\r\n", "\n").replace("\r", "\n").split("\n")
+        blocks = []
         for (line, start, end), value in sorted(self.values.get(path, {}).items(), reverse=True):
-            expression = tangle.INLINE_VALUE.match(lines[line - 1], start)["expression"]
-            shown = (f'<span class="computed" title="{html.escape(expression.strip())}">{value}</span>'
-                     if marked else value)
+            expression = tangle.INLINE_VALUE.match(lines[line - 1], start)["expression"].strip()
+            if not marked:
+                shown = value
+            elif "\n" in value:
+                shown = BLOCK_PLACEHOLDER.format(len(blocks))
+                blocks.append((expression, value))
+            else:
+                shown = f'<span class="computed" title="{html.escape(expression)}">{value}</span>'
             lines[line - 1] = lines[line - 1][:start] + shown + lines[line - 1][end:]
-        return "\n".join(lines)
+        return "\n".join(lines), blocks
 
     def warn(self, message: str) -> None:
         if message in self.warnings:
@@ -1166,12 +1203,13 @@ class Weave:
 
     def index_html(self, pages: list[Page], api: list[dict]) -> str:
         intro = pages[0].title if pages else "ident"
-        parts = ["<h1>ident: the literate program</h1>",
-                 f"<p><em>{html.escape(intro)}</em>, after I. Markovsky. This is the literate program "
-                 "of the Python package <code>ident</code>, woven from the Markdown documents in "
-                 "<code>literate/</code>: the text with its mathematics, the code chunks of the package with "
-                 "their cross references, and the examples with their output as they ran when this was "
-                 "written.</p>",
+        parts = [f"<h1>{html.escape(intro)}</h1>",
+                 pages[0].front if pages else "",
+                 f'<p class="muted">This is the literate program of the Python package <code>ident</code>, '
+                 "woven from the Markdown documents in <code>literate/</code>: the text with its mathematics, "
+                 "the code chunks of the package with their cross references, and the examples with their "
+                 f'output as they ran when this was woven. <a href="{pages[0].file if pages else "#"}">'
+                 "Start reading</a>.</p>",
                  '<nav class="toc" aria-label="contents"><h2>Contents</h2>\n<ol>']
         for page in pages:
             sub = self.toc_html(page.headings, page.file, with_page=True, levels=(2,))
@@ -1296,7 +1334,7 @@ class Weave:
         import nbformat
 
         try:
-            notebook = jupytext.reads(self.text_with_values(document.path, marked=False), fmt="md")
+            notebook = jupytext.reads(self.text_with_values(document.path, marked=False)[0], fmt="md")
         except Exception as error:
             self.warn(f"{document.path}: warning: jupytext cannot read it, no notebook: {error}")
             return None
