@@ -1010,8 +1010,9 @@ class Weave:
         self.warnings: list[str] = []
         self.math_count = 0
         # the text is read once: pages, examples and notebooks all come from this snapshot
-        self.texts = {path.relative_to(self.root).as_posix(): path.read_text(encoding="utf-8")
-                      for path in tangle.literate_files(self.root)}
+        self.texts = {relative: tangle.read_literate(path, relative).removeprefix("\ufeff")
+                      for path in tangle.literate_files(self.root)
+                      for relative in [path.relative_to(self.root).as_posix()]}
         self.web = tangle.build_web([tangle.parse_document(text, path) for path, text in self.texts.items()])
         self.xref = cross_references(self.web)
         self.stems = {Path(d.path).stem for d in self.web.documents}

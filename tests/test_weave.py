@@ -415,6 +415,13 @@ def test_names_an_example_reads_and_binds() -> None:
     assert weave.module_names("a = 1\nb = 2\nc = 3", after=2)[0] == {"b", "c"}
 
 
+def test_a_document_that_is_not_utf8_is_refused_with_its_line(tmp_path, capsys) -> None:
+    root = make_project(tmp_path / "project")
+    (root / "literate" / "02-second.md").write_bytes(SECOND.encode("utf-8") + b"\ncaf\xe9\n")
+    assert weave.main(["--root", str(root), "--out", str(tmp_path / "out")]) == 1
+    assert "literate/02-second.md:" in capsys.readouterr().err and not (tmp_path / "out").exists()
+
+
 def test_unknown_latex_is_reported_with_its_line(tmp_path, capsys) -> None:
     root = make_project(tmp_path / "project", first=FIRST.replace("$a_1 + \\hat w$", "$\\nosuchmacro{x}$"))
     assert weave.main(["--root", str(root), "--out", str(tmp_path / "out")]) == 0
