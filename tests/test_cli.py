@@ -174,9 +174,14 @@ def test_daisy_and_lag_on_a_data_set(tmp_path, capsys):
     if not (SHARED / "erie.dat").is_file():
         pytest.skip(f"the DAISY files are not in {SHARED}")
     status, out, err = run(["daisy", "erie", "--data-dir", SHARED, "--no-download", "--out", tmp_path / "out",
-                            "--quiet", "--starts", "lra", "--maxiter", "30"], capsys)
+                            "--quiet", "--init", "lra", "--maxiter", "30"], capsys)
     assert status == 0, err
     assert "mean validation fit over 1 sets" in out and (tmp_path / "out" / "figure1.png").is_file()
+    results = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert results["settings"]["init"] == ["lra"]
+    assert [c["start"] for c in results["sets"][0]["modes"]["eiv"]["candidates"]] == ["lra"]
+    status, _, err = run(["daisy", "erie", "--out", tmp_path / "out2", "--init", "auto", "lra"], capsys)
+    assert status == 2 and "--init: 'auto' stands alone" in err
     status, out, err = run(["lag", "erie", "--data-dir", SHARED, "--lags", "1,2", "--modes", "eiv", "--maxiter", "20",
                             "--plot", tmp_path / "erie.png"], capsys)
     assert status == 0, err
