@@ -9,13 +9,17 @@ and from the least-squares kernel (`arx`), maxiter 500, tol 1e-5: 68 jobs. They 
 2. on a local Dask cluster of `--workers` processes (default 2; the start of the cluster is
    included in the wall time and also reported alone),
 3. optionally (`--process-pool`) in a `ProcessPoolExecutor` of as many processes,
+4. optionally (`--dask-defaults`) on a local cluster as Dask starts it, with its worker environment
+   `MALLOC_TRIM_THRESHOLD_=65536` that `dask_executor` leaves out,
 
 and the script checks that every result is bit for bit the result of the serial run, prints the
-times and their ratio, and writes them to benchmarks/bench_batch.json (read by
-literate/04b-many-identifications.md). Timings on a machine shared with other work are noisy: the
-runs are side by side in one process so that their ratio is fair, and the load average is recorded.
+times and their ratio, and writes them, with every job's size and time in the serial run, to
+benchmarks/bench_batch.json (read by literate/04b-many-identifications.md). Timings on a machine
+shared with other work are noisy: the runs are side by side in one process so that their ratio is
+fair, and the load average is recorded.
 
-Usage: python benchmarks/bench_batch.py [--data-dir DIR] [--workers N] [--process-pool] [--out FILE]
+Usage: python benchmarks/bench_batch.py [--data-dir DIR] [--workers N] [--process-pool] [--dask-defaults]
+                                        [--out FILE]
 """
 from __future__ import annotations
 
@@ -33,8 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ident import Job, dask_executor, run_jobs
-from ident import daisy
+from ident import Job, dask_executor, daisy, run_jobs
+from ident.batch import ONE_THREAD
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "daisy"
@@ -74,6 +78,8 @@ def main(argv=None) -> int:
     parser.add_argument("--data-dir", default=os.environ.get("IDENT_DAISY_DIR") or SHARED)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--process-pool", action="store_true", help="also run in a ProcessPoolExecutor")
+    parser.add_argument("--dask-defaults", action="store_true",
+                        help="also run on a local cluster with Dask's worker environment (MALLOC_TRIM_THRESHOLD_)")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "bench_batch.json")
     args = parser.parse_args(argv)
     where = machine()
@@ -95,6 +101,19 @@ def main(argv=None) -> int:
     outcomes[name], wall = timed(name, on_dask)
     runs[name] = {"wall": wall, "cluster_start": cluster_start[0],
                   "sum_of_job_seconds": sum(r.seconds for r in outcomes[name])}
+    if args.dask_defaults:
+        name = f"dask defaults, {args.workers} workers"
+
+        def on_dask_defaults():  # as dask_executor, but with Dask's MALLOC_TRIM_THRESHOLD_=65536 kept
+            import distributed
+
+            with distributed.LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
+                                          dashboard_address=None, env=ONE_THREAD) as cluster:
+                with distributed.Client(cluster) as client:
+                    return run_jobs(jobs, client.get_executor(pure=False))
+
+        outcomes[name], wall = timed(name, on_dask_defaults)
+        runs[name] = {"wall": wall, "sum_of_job_seconds": sum(r.seconds for r in outcomes[name])}
     if args.process_pool:
         name = f"process pool, {args.workers} processes"
         context = multiprocessing.get_context("spawn")
@@ -114,7 +133,8 @@ def main(argv=None) -> int:
     document = {"generated": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
                 "command": "python benchmarks/bench_batch.py " + " ".join(argv if argv is not None else sys.argv[1:]),
                 "machine": where, "n_jobs": len(jobs), "failed_jobs": [list(label) for label in failed],
-                "identical": identical, "runs": runs}
+                "identical": identical, "runs": runs,
+                "serial_jobs": [{"label": list(r.job.label), "size": r.job.size, "seconds": r.seconds} for r in serial]}
     args.out.write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")
     print(f"wrote {args.out}")
     return 0 if identical else 1

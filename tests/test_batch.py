@@ -205,6 +205,28 @@ def test_what_the_executor_raises_is_that_jobs_error() -> None:
     assert results[1].job.label == 1 and "OSError" in results[1].traceback
 
 
+def test_jobs_are_submitted_largest_first_and_returned_in_order() -> None:
+    class Recording:
+        def __init__(self):
+            self.order = []
+
+        def submit(self, function, job):
+            self.order.append(job.label)
+            future = concurrent.futures.Future()
+            future.set_result(function(job))
+            return future
+
+    rng = np.random.default_rng(2)
+    system = random_system(1, 1, 1, rng)
+    sizes = [50, 200, 80, 200, 120]
+    jobs = [Job(trajectory(rng, system, n), 1, 1, label=k) for k, n in enumerate(sizes)]
+    jobs.append(Job([trajectory(rng, system, 100), trajectory(rng, system, 60)], 1, 1, label=5))
+    executor = Recording()
+    results = run_jobs(jobs, executor)
+    assert executor.order == [1, 3, 5, 4, 2, 0]  # 200, 200 (ties in order), 160, 120, 80, 50 samples
+    assert [r.job.label for r in results] == list(range(6)) and all(r.ok for r in results)
+
+
 def test_dask_executor_arguments_are_checked() -> None:
     for kwargs, error, message in [
         ({"workers": 0}, ValueError, r"workers must satisfy 1 <= workers \(the number of worker processes\), got 0"),
