@@ -70,6 +70,7 @@ MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".gif"
         ".svg": "image/svg+xml", ".webp": "image/webp"}
 TEXT_COLUMNS = 88  # characters of code that fit in the text column (45rem at the CSS below)
 TEXT_WIDTH_PX = 720  # the text column in CSS pixels; a wider figure widens its example
+CAPTION = re.compile(r"^\s*#\s*caption:\s*(?P<caption>\S.*?)\s*$")  # in an example: its figure's caption
 PLACEHOLDER = "WEAVEREF{}X"
 BLOCK_PLACEHOLDER = "WEAVEVALUE{}X"
 PLACEHOLDER_HTML = re.compile(r'<span class="[^"]*">WEAVEREF(\d+)X</span>|WEAVEREF(\d+)X')
@@ -690,6 +691,7 @@ class PageRenderer:
         self.formatter = HtmlFormatter(nowrap=True)
         self.blocks = {b.location.line: b for b in document.items if isinstance(b, tangle.Block)}
         self.rendered: set[int] = set()
+        self.figure_count = 0  # figures on the page so far
         self.md = make_markdown()
         rules = self.md.renderer.rules  # bound methods: add_render_rule would rebind them to the renderer
         rules["fence"] = self.render_fence
@@ -827,18 +829,25 @@ class PageRenderer:
             if result.stderr:
                 parts.append(f'<pre class="output stderr" aria-label="standard error">'
                              f'{html.escape(result.stderr.rstrip())}</pre>')
-            for k, figure in enumerate(result.figures, start=1):
-                parts.append(self.render_figure(figure, f"Figure {k} of the example “{block.name}”"))
+            captions = [match["caption"] for match in map(CAPTION.match, block.lines) if match]
+            for k, figure in enumerate(result.figures):
+                self.figure_count += 1
+                caption = captions[k] if k < len(captions) else block.name
+                parts.append(self.render_figure(figure, self.figure_count, caption))
         parts.append("</div>")
         return "\n".join(parts) + "\n"
 
-    def render_figure(self, figure: Figure, caption: str) -> str:
+    def render_figure(self, figure: Figure, number: int, caption: str) -> str:
+        """A figure with its number on the page and its caption (Markdown, from ``# caption:``)."""
         source = html.escape(figure.path)
         if Path(figure.path).suffix.lower() not in IMAGE_SUFFIXES:
             return f'<p class="figure-link"><a href="{source}">{html.escape(Path(figure.path).name)}</a></p>'
         size = f' width="{figure.width}" height="{figure.height}"' if figure.width and figure.height else ""
-        return (f'<figure class="example-figure"><a href="{source}"><img src="{source}"{size} '
-                f'alt="{html.escape(caption)}"></a><figcaption>{html.escape(caption)}</figcaption></figure>')
+        text = self.md.renderInline(caption)
+        alt = re.sub(r"<[^>]+>", "", text)
+        return (f'<figure class="example-figure" id="figure-{number}"><a href="{source}"><img src="{source}"{size} '
+                f'alt="{html.escape(alt)}"></a><figcaption><span class="figure-number">Figure {number}.</span> '
+                f"{text}</figcaption></figure>")
 
     def render(self) -> "Page":
         text, values = self.weave.text_with_values(self.document.path, marked=True)
@@ -870,7 +879,10 @@ class PageRenderer:
                              "as a fenced code block; start its fence at column 0 outside lists and quotes")
         title = next((plain for level, _, _, plain in headings if level == 1), Path(self.page).stem)
         headings = [(level, anchor, label) for level, anchor, label, _ in headings]
-        return Page(self.document, self.page, title, headings, head, body)
+        first_section = next((k for k, t in enumerate(tokens) if k > title_end and t.type == "heading_open"
+                              and t.tag == "h2"), len(tokens))
+        front = self.md.renderer.render(tokens[title_end + 1:first_section], self.md.options, env)
+        return Page(self.document, self.page, title, headings, head, body, front)
 
 
 def wide(lines: list[str]) -> str:
@@ -906,6 +918,7 @@ class Page:
     headings: list[tuple[int, str, str]]  # level, id, label (HTML)
     head: str  # the HTML up to and including the title
     body: str
+    front: str = ""  # the HTML between the title and the first section: the abstract of the first page
 
 
 # --------------------------------------------------------------------------------------------
@@ -970,6 +983,7 @@ nav.toc ul { margin: .2em 0; padding-left: 1.2em; } nav.toc li { margin: .1em 0;
 pre.output { background: #fff; border-left: 3px solid #8c959f; border-radius: 0; max-height: 32em; }
 pre.stderr { border-left-color: #bf8700; color: #6e4b00; }
 figure { margin: .8em 0 1.2em; } figcaption { font-size: .85em; color: var(--muted); }
+.figure-number { font-weight: 600; color: var(--text); }
 ul.chunk-index { list-style: none; padding-left: 0; font-size: .95em; }
 ul.chunk-index li { margin: .15em 0; padding-left: 1.5em; text-indent: -1.5em; }
 .api-table .kind { font-size: .85em; }
@@ -996,8 +1010,9 @@ class Weave:
         self.warnings: list[str] = []
         self.math_count = 0
         # the text is read once: pages, examples and notebooks all come from this snapshot
-        self.texts = {path.relative_to(self.root).as_posix(): path.read_text(encoding="utf-8")
-                      for path in tangle.literate_files(self.root)}
+        self.texts = {relative: tangle.read_literate(path, relative).removeprefix("\ufeff")
+                      for path in tangle.literate_files(self.root)
+                      for relative in [path.relative_to(self.root).as_posix()]}
         self.web = tangle.build_web([tangle.parse_document(text, path) for path, text in self.texts.items()])
         self.xref = cross_references(self.web)
         self.stems = {Path(d.path).stem for d in self.web.documents}
@@ -1189,12 +1204,13 @@ class Weave:
 
     def index_html(self, pages: list[Page], api: list[dict]) -> str:
         intro = pages[0].title if pages else "ident"
-        parts = ["<h1>ident: the literate program</h1>",
-                 f"<p><em>{html.escape(intro)}</em>, after I. Markovsky. This is the literate program "
-                 "of the Python package <code>ident</code>, woven from the Markdown documents in "
-                 "<code>literate/</code>: the text with its mathematics, the code chunks of the package with "
-                 "their cross references, and the examples with their output as they ran when this was "
-                 "written.</p>",
+        parts = [f"<h1>{html.escape(intro)}</h1>",
+                 pages[0].front if pages else "",
+                 f'<p class="muted">This is the literate program of the Python package <code>ident</code>, '
+                 "woven from the Markdown documents in <code>literate/</code>: the text with its mathematics, "
+                 "the code chunks of the package with their cross references, and the examples with their "
+                 f'output as they ran when this was woven. <a href="{pages[0].file if pages else "#"}">'
+                 "Start reading</a>.</p>",
                  '<nav class="toc" aria-label="contents"><h2>Contents</h2>\n<ol>']
         for page in pages:
             sub = self.toc_html(page.headings, page.file, with_page=True, levels=(2,))

@@ -65,6 +65,7 @@ def helper():
 import matplotlib.pyplot as plt
 
 print("hello <world> & all")
+# caption: A line through *three* points, $x^2$ aside.
 plt.figure(figsize=(2, 2))
 plt.plot([1, 2, 3])
 shared = 41
@@ -226,7 +227,7 @@ def test_headings_get_ids_and_a_table_of_contents(small) -> None:
 def test_mathematics_becomes_mathml(small) -> None:
     _, out, _ = small
     first = read(out, "01-first.html")
-    assert first.count("<math ") == 4  # title, inline, display, table cell
+    assert first.count("<math ") == 5  # title, inline, display, table cell, a caption
     assert '<math xmlns="http://www.w3.org/1998/Math/MathML" display="block">' in first
     assert "$" not in re.sub(r"<pre.*?</pre>", "", first, flags=re.S)
     assert "<table>" in first
@@ -254,6 +255,24 @@ def test_examples_show_their_output_and_figures(small) -> None:
         assert data.startswith(b"\x89PNG") and b"tEXt" not in data and b"tIME" not in data
     assert 'width="220" height="220"' in first  # 2 x 2 inches at the weave's 110 dpi
     assert "own-figure.png" in first.split('id="example-writes-its-own-figure"')[1].split('class="example"')[0]
+
+
+def test_figures_are_numbered_and_captioned(small) -> None:
+    _, out, _ = small
+    first = read(out, "01-first.html")
+    assert ('<figcaption><span class="figure-number">Figure 1.</span> A line through <em>three</em> points, '
+            '<math') in first
+    assert 'alt="A line through three points' in first
+    # figures without a caption line are numbered on and captioned with their example's name
+    assert '<span class="figure-number">Figure 3.</span> binds a figure and uses the namespace' in first
+    assert "Figure 1 of the example" not in first
+
+
+def test_the_index_opens_with_the_first_documents_abstract(small) -> None:
+    _, out, _ = small
+    index = read(out, "index.html")
+    assert "<h1>A small program with x^2</h1>" in index
+    assert index.index("Some text with inline math") < index.index('<nav class="toc"')
 
 
 def test_notebooks_carry_the_outputs(small) -> None:
@@ -371,7 +390,7 @@ def test_a_value_of_several_lines_is_markdown_of_its_own(tmp_path, capsys) -> No
     assert weave.main(["--root", str(root), "--out", str(out)]) == 0
     page = read(out, "01-first.html")
     assert '<div class="computed" title="&#x27;| a | b |' in page and "<table>" in page.split("After the table")[0]
-    assert "<td>1</td>" in page and page.count("<math ") == 5  # the formula in the table is MathML too
+    assert "<td>1</td>" in page and page.count("<math ") == 6  # the formula in the table is MathML too
     inline = FIRST + "\nIn a sentence: `{python} 'two\\nlines'`.\n"
     (root / "literate" / "01-first.md").write_text(inline, encoding="utf-8")
     assert weave.main(["--root", str(root), "--out", str(out)]) == 1
@@ -394,6 +413,13 @@ def test_names_an_example_reads_and_binds() -> None:
     assert weave.module_names("x = x + 1") == ({"x"}, {"x"})
     assert weave.module_names("f'{info.M:.3g}'", "eval") == (set(), {"info"})
     assert weave.module_names("a = 1\nb = 2\nc = 3", after=2)[0] == {"b", "c"}
+
+
+def test_a_document_that_is_not_utf8_is_refused_with_its_line(tmp_path, capsys) -> None:
+    root = make_project(tmp_path / "project")
+    (root / "literate" / "02-second.md").write_bytes(SECOND.encode("utf-8") + b"\ncaf\xe9\n")
+    assert weave.main(["--root", str(root), "--out", str(tmp_path / "out")]) == 1
+    assert "literate/02-second.md:" in capsys.readouterr().err and not (tmp_path / "out").exists()
 
 
 def test_unknown_latex_is_reported_with_its_line(tmp_path, capsys) -> None:
