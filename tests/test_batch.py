@@ -166,6 +166,21 @@ def test_an_executor_that_is_not_one_is_named() -> None:
             run_jobs([job], executor)
 
 
+def test_a_thread_pool_is_refused_and_jobs_sharing_a_process_are_flagged() -> None:
+    job = Job(np.zeros((10, 2)), 1, 1)
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:
+        with pytest.raises(TypeError, match="executor must run the jobs in processes, not in threads"):
+            run_jobs([job], pool)
+        rng = np.random.default_rng(3)
+        system = random_system(2, 2, 3, rng)
+        jobs = [Job(trajectory(rng, system, 40_000), 2, 3) for _ in range(2)]  # a few tenths of a second each
+        together = list(pool.map(run_job, jobs))  # run_job itself, in two threads at once
+    for result in together:
+        assert result.ok and result.warnings[-1][0] is RuntimeWarning
+        assert "ran at the same time as other jobs in threads of process" in result.warnings[-1][1]
+    assert run_job(jobs[0]).warnings == ()
+
+
 def test_jobs_that_are_not_jobs_are_named() -> None:
     job = Job(np.zeros((10, 2)), 1, 1)
     with pytest.raises(TypeError, match=r"got a single Job; pass \[job\]"):
