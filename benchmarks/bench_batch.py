@@ -16,10 +16,12 @@ and the script checks that every result is bit for bit the result of the serial 
 times and their ratio, and writes them, with every job's size and time in the serial run, to
 benchmarks/bench_batch.json (read by literate/04b-many-identifications.md). Timings on a machine
 shared with other work are noisy: the runs are side by side in one process so that their ratio is
-fair, and the load average is recorded.
+fair, `--rounds N` repeats all of them in turn (the ratios of every round and their median are
+written), and the load average is recorded before each round; each job's processor time is written
+beside its wall time, so that a busy machine shows as wall time far above processor time.
 
-Usage: python benchmarks/bench_batch.py [--data-dir DIR] [--workers N] [--process-pool] [--dask-defaults]
-                                        [--out FILE]
+Usage: python benchmarks/bench_batch.py [--data-dir DIR] [--workers N] [--rounds N] [--process-pool]
+                                        [--dask-defaults] [--out FILE]
 """
 from __future__ import annotations
 
@@ -58,83 +60,97 @@ def daisy_jobs(directory) -> list[Job]:
     return jobs
 
 
-def timed(label: str, run) -> tuple[list, float]:
-    print(f"{label} ...", end=" ", flush=True)
+def variants(args) -> dict:
+    """name -> function(jobs) returning (results, seconds to start the executor)."""
+
+    def serial(jobs):
+        return run_jobs(jobs), 0.0
+
+    def on_dask(jobs):
+        started = time.perf_counter()
+        with dask_executor(workers=args.workers) as executor:
+            start = time.perf_counter() - started
+            return run_jobs(jobs, executor), start
+
+    def on_dask_defaults(jobs):  # as dask_executor, but with Dask's MALLOC_TRIM_THRESHOLD_=65536 kept
+        import distributed
+
+        started = time.perf_counter()
+        with distributed.LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
+                                      dashboard_address=None, env=ONE_THREAD) as cluster:
+            with distributed.Client(cluster) as client:
+                start = time.perf_counter() - started
+                return run_jobs(jobs, client.get_executor(pure=False)), start
+
+    def in_pool(jobs):
+        started = time.perf_counter()
+        with concurrent.futures.ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("spawn")) \
+                as pool:
+            start = time.perf_counter() - started
+            return run_jobs(jobs, pool), start
+
+    chosen = {"serial": serial, f"dask, {args.workers} workers": on_dask}
+    if args.dask_defaults:
+        chosen[f"dask defaults, {args.workers} workers"] = on_dask_defaults
+    if args.process_pool:
+        chosen[f"process pool, {args.workers} processes"] = in_pool
+    return chosen
+
+
+def measured(name: str, run, jobs) -> tuple[list, dict]:
+    print(f"  {name} ...", end=" ", flush=True)
     started = time.perf_counter()
-    results = run()
+    results, start = run(jobs)
     wall = time.perf_counter() - started
     print(f"{wall:.1f} s", flush=True)
-    return results, wall
+    return results, {"wall": wall, "start": start, "sum_of_job_seconds": sum(r.seconds for r in results),
+                     "sum_of_job_cpu_seconds": sum(r.cpu_seconds for r in results)}
 
 
 def machine() -> str:
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    return (f"{os.cpu_count()} cores ({platform.machine()}), Python {platform.python_version()}, numpy "
-            f"{np.__version__}, load average {load:.1f} when the run started (shared with other work)")
+    return f"{os.cpu_count()} cores ({platform.machine()}), Python {platform.python_version()}, numpy {np.__version__}"
+
+
+def load_average() -> float:
+    return os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data-dir", default=os.environ.get("IDENT_DAISY_DIR") or SHARED)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--rounds", type=int, default=1, help="rounds of all variants, one after another")
     parser.add_argument("--process-pool", action="store_true", help="also run in a ProcessPoolExecutor")
     parser.add_argument("--dask-defaults", action="store_true",
                         help="also run on a local cluster with Dask's worker environment (MALLOC_TRIM_THRESHOLD_)")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "bench_batch.json")
     args = parser.parse_args(argv)
-    where = machine()
     jobs = daisy_jobs(args.data_dir)
-    print(f"{len(jobs)} jobs (DAISY Table 1, both modes, starts lra and arx); {where}")
+    print(f"{len(jobs)} jobs (DAISY Table 1, both modes, starts lra and arx); {machine()}")
     warnings.simplefilter("ignore")  # non-convergence is in each result's info
-    runs = {}
-    serial, wall = timed("serial", lambda: run_jobs(jobs))
-    runs["serial"] = {"wall": wall, "sum_of_job_seconds": sum(r.seconds for r in serial)}
-    outcomes, cluster_start = {}, []
-
-    def on_dask():
-        started = time.perf_counter()
-        with dask_executor(workers=args.workers) as executor:
-            cluster_start.append(time.perf_counter() - started)
-            return run_jobs(jobs, executor)
-
-    name = f"dask, {args.workers} workers"
-    outcomes[name], wall = timed(name, on_dask)
-    runs[name] = {"wall": wall, "cluster_start": cluster_start[0],
-                  "sum_of_job_seconds": sum(r.seconds for r in outcomes[name])}
-    if args.dask_defaults:
-        name = f"dask defaults, {args.workers} workers"
-
-        def on_dask_defaults():  # as dask_executor, but with Dask's MALLOC_TRIM_THRESHOLD_=65536 kept
-            import distributed
-
-            with distributed.LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
-                                          dashboard_address=None, env=ONE_THREAD) as cluster:
-                with distributed.Client(cluster) as client:
-                    return run_jobs(jobs, client.get_executor(pure=False))
-
-        outcomes[name], wall = timed(name, on_dask_defaults)
-        runs[name] = {"wall": wall, "sum_of_job_seconds": sum(r.seconds for r in outcomes[name])}
-    if args.process_pool:
-        name = f"process pool, {args.workers} processes"
-        context = multiprocessing.get_context("spawn")
-
-        def in_pool():
-            with concurrent.futures.ProcessPoolExecutor(args.workers, mp_context=context) as pool:
-                return run_jobs(jobs, pool)
-
-        outcomes[name], wall = timed(name, in_pool)
-        runs[name] = {"wall": wall, "sum_of_job_seconds": sum(r.seconds for r in outcomes[name])}
-    identical = all(a.identical_to(b) for results in outcomes.values() for a, b in zip(serial, results))
+    rounds, serial, identical = [], None, True
+    for k in range(args.rounds):
+        print(f"round {k + 1} of {args.rounds}, load average {load_average():.1f}")
+        times = {"load_average_before": load_average()}
+        for name, run in variants(args).items():
+            results, times[name] = measured(name, run, jobs)
+            serial = serial or results
+            identical = identical and all(a.identical_to(b) for a, b in zip(serial, results))
+        rounds.append(times)
+    names = [name for name in rounds[0] if name not in ("serial", "load_average_before")]
+    ratios = {name: [r[name]["wall"] / r["serial"]["wall"] for r in rounds] for name in names}
     failed = [r.job.label for r in serial if not r.ok]
-    print(f"identical to the serial run: {identical}; failed jobs: {failed or 'none'}")
-    for name, run in runs.items():
-        print(f"  {name:28s} wall {run['wall']:6.1f} s  ratio to serial {run['wall'] / runs['serial']['wall']:.2f}"
-              + (f"  (cluster start {run['cluster_start']:.1f} s)" if "cluster_start" in run else ""))
+    print(f"identical to the first serial run: {identical}; failed jobs: {failed or 'none'}")
+    for name, values in ratios.items():
+        print(f"  {name:28s} wall / serial wall: {', '.join(f'{v:.2f}' for v in values)} "
+              f"(median {np.median(values):.2f})")
     document = {"generated": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
                 "command": "python benchmarks/bench_batch.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-                "machine": where, "n_jobs": len(jobs), "failed_jobs": [list(label) for label in failed],
-                "identical": identical, "runs": runs,
-                "serial_jobs": [{"label": list(r.job.label), "size": r.job.size, "seconds": r.seconds} for r in serial]}
+                "machine": machine(), "n_jobs": len(jobs), "failed_jobs": [list(label) for label in failed],
+                "identical": identical, "rounds": rounds, "ratios": ratios,
+                "median_ratio": {name: float(np.median(values)) for name, values in ratios.items()},
+                "serial_jobs": [{"label": list(r.job.label), "size": r.job.size, "seconds": r.seconds,
+                                 "cpu_seconds": r.cpu_seconds} for r in serial]}
     args.out.write_text(json.dumps(document, indent=1) + "\n", encoding="utf-8")
     print(f"wrote {args.out}")
     return 0 if identical else 1

@@ -134,7 +134,7 @@ def test_identical_to_sees_one_bit(serial) -> None:
     nudged[7, 1] = np.nextafter(nudged[7, 1], np.inf)
     assert not result.identical_to(dataclasses.replace(result, wh=nudged))
     info = dataclasses.replace(result.info, time=result.info.time + 1)  # times aside
-    assert result.identical_to(dataclasses.replace(result, info=info, seconds=0.0, worker="elsewhere:1"))
+    assert result.identical_to(dataclasses.replace(result, info=info, seconds=0.0, cpu_seconds=0.0, worker="elsewhere:1"))
     rh = result.info.Rh.copy()
     rh[0, 0] = -rh[0, 0]
     assert not result.identical_to(dataclasses.replace(result, info=dataclasses.replace(result.info, Rh=rh)))
