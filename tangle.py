@@ -11,13 +11,21 @@ a Markdown file:
   indentation applied to every included line;
 * an *example* is a fenced block ```` ```python ```` (no ``.noeval``) whose first line is
   ``# example: name``; examples are not tangled, they run as tests and as notebook cells;
-* other fenced blocks (``.noeval`` without a chunk header, other languages) are only displayed.
+* other fenced blocks (``.noeval`` without a chunk header, other languages) are only displayed;
+* an *inline value* is a code span ```{python} expression``` in the text (Quarto's form): the weave
+  replaces it by the value the expression has at that place of the document, after the examples
+  above it ran; the example tests evaluate it too.
 
 Usage::
 
     python tangle.py            # write every root chunk to its file
     python tangle.py --check    # exit 1 and name each file that differs from the literate sources
     python tangle.py --where src/ident/hankel.py:42   # which literate line produced that line
+
+The tangler reads UTF-8 (a byte-order mark is allowed), writes only ``.py`` files inside
+``src/ident/`` and removes only generated files there whose root chunk is gone, and writes all
+files or none: a refusal changes nothing and names the literate ``file:line`` behind it (or the
+option).  Chunks may nest to any depth.
 
 Standard library only: the tangler must run before anything is installed.  The woven document is
 written by ``python weave.py``, which imports this module (this module never imports it).
@@ -26,6 +34,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import re
 import sys
 from pathlib import Path
@@ -38,6 +47,7 @@ CHUNK_HEADER = re.compile(r"^#\s*<<(?P<name>.+?)>>(?P<op>\+?=)\s*$")
 HEADER_LIKE = re.compile(r"^#\s*<<")
 EXAMPLE_HEADER = re.compile(r"^#\s*example:\s*(?P<name>\S.*?)\s*$")
 REFERENCE = re.compile(r"^(?P<indent>[ \t]*)<<(?P<name>.+?)>>\s*$")
+INLINE_VALUE = re.compile(r"`\{python\}[ \t]+(?P<expression>[^`]*?)[ \t]*`")
 
 
 class TangleError(Exception):
@@ -70,11 +80,53 @@ class Block:
         skip = 1 if self.kind == "display" else 2
         return Location(self.location.file, self.location.line + skip)
 
+    @property
+    def closing_line(self) -> int:
+        """The line of the closing fence."""
+        return self.body_location.line + len(self.lines)
+
+
+@dataclasses.dataclass(frozen=True)
+class InlineValue:
+    """A code span ```{python} expression``` in the text of a document."""
+
+    expression: str
+    location: Location  # the line of the text that holds it
+    start: int  # the span's columns in that line, [start, end)
+    end: int
+
 
 @dataclasses.dataclass
 class Document:
     path: str
     items: list  # str (a Markdown text line) or Block, in order
+
+    def text_lines(self):
+        """(line number, text) of each Markdown text line, outside the fenced blocks."""
+        number = 1
+        for item in self.items:
+            if isinstance(item, Block):
+                number = item.closing_line + 1
+            else:
+                yield number, item
+                number += 1
+
+    def inline_values(self) -> list[InlineValue]:
+        """The inline values of the text, in reading order."""
+        found = []
+        for number, line in self.text_lines():
+            for match in INLINE_VALUE.finditer(line):
+                location = Location(self.path, number)
+                if not match["expression"].strip():
+                    raise TangleError(f"{location}: empty inline value `{{python}} `; write `{{python}} expression`")
+                found.append(InlineValue(match["expression"].strip(), location, match.start(), match.end()))
+        return found
+
+    def runnable(self) -> list:
+        """The examples and inline values in reading order: what runs when the document is read."""
+        examples = [b for b in self.items if isinstance(b, Block) and b.kind == "example"]
+        key = lambda unit: (unit.location.line, getattr(unit, "start", -1))  # noqa: E731
+        return sorted(examples + self.inline_values(), key=key)
 
 
 def normalise_name(name: str) -> str:
@@ -95,6 +147,7 @@ def parse_info(info: str) -> tuple[str, set[str]]:
 
 def parse_document(text: str, path: str) -> Document:
     """Split a Markdown file into text lines and classified code blocks."""
+    text = text.removeprefix("\ufeff")  # a UTF-8 byte-order mark (some editors write one) is not text
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
     if lines and lines[-1] == "":
         lines.pop()
@@ -179,11 +232,26 @@ def literate_files(root: Path) -> list[Path]:
     return sorted((root / "literate").rglob("*.md"), key=lambda p: p.relative_to(root).as_posix())
 
 
+def read_literate(path: Path, relative: str) -> str:
+    """The text of a literate document; TangleError with file:line if it cannot be read as UTF-8."""
+    try:
+        data = path.read_bytes()
+    except OSError as error:
+        raise TangleError(f"{relative}:1: cannot read the file ({error.strerror or error})") from None
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        line = data.count(b"\n", 0, error.start) + 1
+        column = error.start - (data.rfind(b"\n", 0, error.start) + 1) + 1
+        raise TangleError(f"{relative}:{line}: not valid UTF-8 (byte 0x{data[error.start]:02x} at column "
+                          f"{column}: {error.reason}); save the file as UTF-8") from None
+
+
 def read_web(root: Path) -> Web:
     documents = []
     for path in literate_files(root):
         relative = path.relative_to(root).as_posix()
-        documents.append(parse_document(path.read_text(encoding="utf-8"), relative))
+        documents.append(parse_document(read_literate(path, relative), relative))
     return build_web(documents)
 
 
@@ -204,11 +272,38 @@ def build_web(documents: list[Document]) -> Web:
                               f"{earlier[0].location}); continue it with <<{block.name}>>+=")
             else:
                 pieces.setdefault(block.name, []).append(block)
+    errors.extend(root_name_errors(pieces))
     if errors:
         raise TangleError("\n".join(errors))
     web = Web(documents, pieces, [])
     check_references(web)
     return web
+
+
+SAFE_SEGMENT = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
+
+
+def root_name_errors(pieces: dict[str, list[Block]]) -> list[str]:
+    """Root chunks must name distinct .py files inside src/ident/: no '..', no odd characters."""
+    errors, seen = [], {}
+    for name in sorted(n for n in pieces if is_root(n)):
+        location = pieces[name][0].location
+        segments = name[len(PACKAGE_DIR) + 1:].split("/")
+        if not name.endswith(".py") or not all(SAFE_SEGMENT.match(s) and s.strip(".") for s in segments):
+            errors.append(f"{location}: root chunk <<{name}>> must name a .py file inside {PACKAGE_DIR}/: "
+                          "path parts of letters, digits, '_', '-' and '.', no '..', empty parts or backslashes")
+            continue
+        folded = name.lower()  # two names one case-insensitive file system would make one file
+        if folded in seen:
+            errors.append(f"{location}: root chunk <<{name}>> names the same file as <<{seen[folded][0]}>> "
+                          f"(at {seen[folded][1]}) on a case-insensitive file system")
+        seen[folded] = (name, location)
+    for folded, (name, location) in seen.items():
+        for parent in (folded.rsplit("/", k)[0] for k in range(1, folded.count("/") - 1)):
+            if parent in seen:
+                errors.append(f"{location}: root chunk <<{name}>> needs a folder where <<{seen[parent][0]}>> "
+                              f"(at {seen[parent][1]}) is a file")
+    return errors
 
 
 def references(block: Block):
@@ -242,33 +337,59 @@ def check_references(web: Web) -> None:
 
 
 def find_cycle(web: Web, name: str, stack: list[tuple[str, Location]], done: set[str]) -> None:
+    """Raise TangleError at the reference that closes a cycle reachable from ``name`` (a depth-first
+    search with an explicit stack, so that deep nesting is no limit)."""
     if name in done:
         return
-    for block in web.pieces[name]:
-        for location, _, target in references(block):
-            names = [n for n, _ in stack] + [name]
-            if target in names:
-                chain = " -> ".join(f"<<{n}>>" for n in names[names.index(target):] + [target])
-                raise TangleError(f"{location}: cycle of chunk references: {chain}")
-            find_cycle(web, target, stack + [(name, location)], done)
-    done.add(name)
+    path = [name]  # the chain of chunks being expanded, with an iterator over each one's references
+    pending = [iter([t for block in web.pieces[name] for t in references(block)])]
+    while pending:
+        following = next(pending[-1], None)
+        if following is None:
+            done.add(path.pop())
+            pending.pop()
+            continue
+        location, _, target = following
+        if target in path:
+            chain = " -> ".join(f"<<{n}>>" for n in path[path.index(target):] + [target])
+            raise TangleError(f"{location}: cycle of chunk references: {chain}")
+        if target not in done:
+            path.append(target)
+            pending.append(iter([t for block in web.pieces[target] for t in references(block)]))
 
 
 def expand(web: Web, name: str, indent: str = "") -> list[tuple[str, Location | None]]:
-    """The lines of chunk ``name`` with references expanded, each with the literate line it came from."""
+    """The lines of chunk ``name`` with references expanded, each with the literate line it came from
+    (an explicit stack of the chunks being expanded, so that deep nesting is no limit)."""
     out: list[tuple[str, Location | None]] = []
+    pending = [(chunk_lines(web, name), indent)]
+    while pending:
+        lines, indent = pending[-1]
+        item = next(lines, None)
+        if item is None:
+            pending.pop()
+        elif item[0] == "reference":
+            _, target, extra = item
+            pending.append((chunk_lines(web, target), indent + extra))
+        else:
+            _, line, location = item
+            out.append(((indent + line).rstrip(), location))
+    return out
+
+
+def chunk_lines(web: Web, name: str):
+    """("line", text, location) for each line of a chunk's pieces, with a header comment per piece,
+    and ("reference", name, indentation) for each reference."""
     for block in web.pieces[name]:
         marker = "+=" if block.continued else "="
         header = Location(block.location.file, block.location.line + 1)
-        out.append((f"{indent}# <<{name}>>{marker} {block.body_location}", header))
+        yield "line", f"# <<{name}>>{marker} {block.body_location}", header
         for offset, line in enumerate(block.lines):
-            location = Location(block.location.file, block.body_location.line + offset)
             match = REFERENCE.match(line)
             if match:
-                out.extend(expand(web, normalise_name(match["name"]), indent + match["indent"]))
+                yield "reference", normalise_name(match["name"]), match["indent"]
             else:
-                out.append(((indent + line).rstrip(), location))
-    return out
+                yield "line", line, Location(block.location.file, block.body_location.line + offset)
 
 
 def render(web: Web, root_name: str) -> tuple[str, list[Location | None]]:
@@ -296,9 +417,13 @@ def generated_on_disk(root: Path) -> list[str]:
     package = root / PACKAGE_DIR
     if package.is_dir():
         for path in sorted(package.rglob("*.py")):
-            with path.open(encoding="utf-8", errors="replace") as handle:
-                if handle.readline().startswith(GENERATED_MARK):
-                    found.append(path.relative_to(root).as_posix())
+            try:
+                with path.open("rb") as handle:
+                    generated = handle.readline().startswith(GENERATED_MARK.encode())
+            except OSError:
+                continue  # a folder named *.py, a broken link: not a generated file
+            if generated:
+                found.append(path.relative_to(root).as_posix())
     return found
 
 
@@ -309,7 +434,9 @@ def differences(root: Path, outputs: dict[str, str]) -> list[str]:
         path = root / name
         if not path.exists():
             problems.append(f"{name}: missing (run python tangle.py)")
-        elif path.read_text(encoding="utf-8") != text:
+        elif not path.is_file():
+            problems.append(f"{name}: is not a file (a folder?) where a generated file belongs")
+        elif path.read_bytes() != text.encode("utf-8"):
             problems.append(f"{name}: differs from what the literate sources produce")
     for name in generated_on_disk(root):
         if name not in outputs:
@@ -317,21 +444,73 @@ def differences(root: Path, outputs: dict[str, str]) -> list[str]:
     return problems
 
 
-def write(root: Path, outputs: dict[str, str]) -> list[str]:
-    """Write changed files, remove stale generated ones; return what was changed."""
-    changed = []
+def inside(folder: Path, path: Path) -> bool:
+    """Whether path, with links and '..' resolved, is the (resolved) folder or lies in it."""
+    resolved = path.resolve()
+    return resolved == folder or folder in resolved.parents
+
+
+def write(root: Path, outputs: dict[str, str], origins: dict[str, Location] | None = None) -> list[str]:
+    """Write changed files and remove stale generated ones, all or nothing; return what was changed.
+
+    Every new content is first written to a temporary file beside its target; only when all are
+    written are they moved into place and the stale files removed, and a failure on the way puts
+    back what was there before. Nothing outside src/ident/ is written or removed. A refusal is a
+    TangleError naming the root chunk's file:line (from ``origins``) or the generated file.
+    """
+    origins = origins or {}
+    package = (root / PACKAGE_DIR).resolve()
+
+    def culprit(name: str) -> str:
+        return f"{origins[name]}: " if name in origins else f"{name}:1: "
+
+    changes = []
     for name, text in outputs.items():
         path = root / name
-        if not path.exists() or path.read_text(encoding="utf-8") != text:
+        if not is_root(name) or not inside(package, path):
+            raise TangleError(f"{culprit(name)}{name} lies outside {PACKAGE_DIR}/ (through '..' or a symbolic "
+                              "link); nothing was written")
+        if path.is_dir():
+            raise TangleError(f"{culprit(name)}{name} is a folder; nothing was written")
+        if not path.is_file() or path.read_bytes() != text.encode("utf-8"):
+            changes.append((name, path, text))
+    stale = [name for name in generated_on_disk(root) if name not in outputs]
+    if stale and not outputs:
+        raise TangleError(f"{root / 'literate'}: no root chunk (<<{PACKAGE_DIR}/FILE.py>>=) in any document; "
+                          f"refusing to remove the {len(stale)} generated file(s) of {PACKAGE_DIR}/")
+    stale = [name for name in stale if inside(package, (root / name).parent)]  # a link itself, not its target
+    undo: list[tuple[Path, bytes | None]] = []  # what each done step replaced, in order
+    temporaries: list[Path] = []
+    made: list[Path] = []  # folders that do not exist yet, outermost first
+    for folder in dict.fromkeys(path.parent for _, path, _ in changes):
+        made.extend(f for f in reversed([folder, *folder.parents]) if not f.exists() and f not in made)
+    current = None
+    try:
+        for current, path, text in changes:
             path.parent.mkdir(parents=True, exist_ok=True)
-            with path.open("w", encoding="utf-8", newline="\n") as handle:
+            temporaries.append(path.with_name(f".{path.name}.tangle-new"))
+            with temporaries[-1].open("w", encoding="utf-8", newline="\n") as handle:
                 handle.write(text)
-            changed.append(f"wrote {name}")
-    for name in generated_on_disk(root):
-        if name not in outputs:
-            (root / name).unlink()
-            changed.append(f"removed {name} (no root chunk)")
-    return changed
+        for (current, path, _), temporary in zip(changes, temporaries):
+            undo.append((path, path.read_bytes() if path.is_file() else None))
+            os.replace(temporary, path)
+        for current in stale:
+            undo.append((root / current, (root / current).read_bytes()))
+            (root / current).unlink()
+    except OSError as error:
+        for temporary in temporaries:
+            temporary.unlink(missing_ok=True)
+        for path, previous in reversed(undo):
+            if previous is None:
+                path.unlink(missing_ok=True)
+            else:
+                path.write_bytes(previous)
+        for folder in reversed(made):
+            if folder.is_dir() and not any(folder.iterdir()):
+                folder.rmdir()
+        raise TangleError(f"{culprit(current)}cannot write {current} ({error.strerror or error}); "
+                          "nothing was changed") from None
+    return [f"wrote {name}" for name, _, _ in changes] + [f"removed {name} (no root chunk)" for name in stale]
 
 
 def where(root: Path, target: str) -> str:
@@ -363,27 +542,38 @@ def main(argv: list[str] | None = None) -> int:
                         help="project root holding literate/ and src/ident/ (default: this file's folder)")
     args = parser.parse_args(argv)
     try:
+        check_root(args.root)
         if args.where:
             print(where(args.root, args.where))
             return 0
         outputs, web = tangle(args.root)
+        for warning in web.warnings:
+            print(warning, file=sys.stderr)
+        if args.check:
+            problems = differences(args.root, outputs)
+            for problem in problems:
+                print(problem)
+            if problems:
+                print(f"tangle.py --check: {len(problems)} file(s) out of date; run python tangle.py",
+                      file=sys.stderr)
+                return 1
+            print(f"tangle.py --check: {len(outputs)} file(s) up to date")
+            return 0
+        origins = {name: web.pieces[name][0].location for name in outputs}
+        for change in write(args.root, outputs, origins):
+            print(change)
     except TangleError as error:
         print(f"tangle.py: error: {error}", file=sys.stderr)
         return 2
-    for warning in web.warnings:
-        print(warning, file=sys.stderr)
-    if args.check:
-        problems = differences(args.root, outputs)
-        for problem in problems:
-            print(problem)
-        if problems:
-            print(f"tangle.py --check: {len(problems)} file(s) out of date; run python tangle.py", file=sys.stderr)
-            return 1
-        print(f"tangle.py --check: {len(outputs)} file(s) up to date")
-        return 0
-    for change in write(args.root, outputs):
-        print(change)
     return 0
+
+
+def check_root(root: Path) -> None:
+    """--root must be a folder with a literate/ folder in it (else nothing is read, and nothing removed)."""
+    if not root.is_dir():
+        raise TangleError(f"--root {root}: no such folder")
+    if not (root / "literate").is_dir():
+        raise TangleError(f"--root {root} has no literate/ folder: nothing to tangle (and nothing was changed)")
 
 
 if __name__ == "__main__":

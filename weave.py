@@ -17,11 +17,17 @@ namespace per document, as ``tests/test_examples.py`` runs them: with the projec
 working directory and ``IDENT_FIGURES`` naming ``docs/figures``.  Under each example the page shows
 what it printed and its figures: files the example wrote into ``$IDENT_FIGURES``; or, if it wrote
 none, the matplotlib figures it left open in pyplot and the ``matplotlib.figure.Figure`` objects it
-bound to new top-level names.  A failing example stops the weave with its name, its ``file:line``
-and the traceback (exit status 1).
+bound to new top-level names.  An *inline value* ```{python} expression``` in the text is replaced
+by the expression's value at that place of the document (after the examples above it ran; or after
+the example below that defines a name it reads), inside a span whose title shows the expression; a
+value of several lines that stands alone on its line is rendered as Markdown of its own (a table).
 
-Weaving twice gives the same files, except for output lines of the examples that report measured
-times.
+The weave is all or nothing.  It writes into a new folder beside the output folder and moves the
+files into the output folder only when every example and inline value ran; files it did not write
+(``docs/daisy/``) stay, and files whose bytes did not change are not touched.  Otherwise it exits with
+status 1, naming each example or inline value that failed with its ``file:line`` and traceback, and
+each one skipped because it reads a name that a failed one was to define; the output folder is left
+as it was.  Weaving twice gives the same files.
 
 Usage::
 
@@ -35,7 +41,9 @@ Needs markdown-it-py, mdit-py-plugins, latex2mathml, Pygments, matplotlib and ju
 from __future__ import annotations
 
 import argparse
+import ast
 import base64
+import builtins
 import contextlib
 import dataclasses
 import html
@@ -45,6 +53,7 @@ import os
 import re
 import shutil
 import struct
+import symtable
 import sys
 import tempfile
 import time
@@ -61,7 +70,9 @@ MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".gif"
         ".svg": "image/svg+xml", ".webp": "image/webp"}
 TEXT_COLUMNS = 88  # characters of code that fit in the text column (45rem at the CSS below)
 TEXT_WIDTH_PX = 720  # the text column in CSS pixels; a wider figure widens its example
+CAPTION = re.compile(r"^\s*#\s*caption:\s*(?P<caption>\S.*?)\s*$")  # in an example: its figure's caption
 PLACEHOLDER = "WEAVEREF{}X"
+BLOCK_PLACEHOLDER = "WEAVEVALUE{}X"
 PLACEHOLDER_HTML = re.compile(r'<span class="[^"]*">WEAVEREF(\d+)X</span>|WEAVEREF(\d+)X')
 
 
@@ -234,29 +245,38 @@ def folder_state(folder: Path) -> dict[str, tuple[int, int]]:
 TEMPORARY_NAME = re.compile("(" + re.escape(tempfile.gettempdir().rstrip(os.sep) + os.sep) + r")tmp[a-z0-9_]{8}\b")
 
 
-class ExampleRunner:
-    """Runs the examples of the documents and collects their output and figures."""
+class ExampleFailure(Exception):
+    """An example or an inline value raised; the message is its traceback (and what it printed)."""
 
-    def __init__(self, root: Path, out: Path):
+    def __init__(self, message: str, line: int | None = None):
+        super().__init__(message)
+        self.line = line  # the line of the document whose top-level statement raised, if known
+
+
+def failing_line(error: BaseException, filename: str) -> int | None:
+    """The line of the top-level statement of ``filename`` that was running when ``error`` was raised."""
+    line, trace = None, error.__traceback__
+    while trace is not None:
+        code = trace.tb_frame.f_code
+        if code.co_filename == filename and code.co_name == "<module>":
+            line = trace.tb_lineno
+        trace = trace.tb_next
+    return line
+
+
+class ExampleRunner:
+    """Runs examples and collects their output and figures (figures only when ``out`` is given)."""
+
+    def __init__(self, root: Path, out: Path | None):
         self.root = root
         self.out = out
-        self.figures = out / "figures"
+        self.figures = out / "figures" if out is not None else None
         self.seen_figures: list = []  # matplotlib figures already shown (kept alive: ids stay unique)
-
-    def run_document(self, document: tangle.Document, anchors: dict[tangle.Location, str]) -> dict:
-        namespace: dict = {"__name__": f"example:{document.path}"}
-        results = {}
-        for block in document.items:
-            if isinstance(block, tangle.Block) and block.kind == "example":
-                base = Path(document.path).stem + "-" + anchors[block.location].removeprefix("example-")
-                results[block.location] = self.run(block, namespace, base)
-        self.close_all()
-        return results
 
     def run(self, block: tangle.Block, namespace: dict, base: str) -> Result:
         source = "\n" * (block.body_location.line - 1) + "\n".join(block.lines) + "\n"
         code = compile(source, str(self.root / block.location.file), "exec")
-        before = folder_state(self.figures)
+        before = folder_state(self.figures) if self.figures else {}
         stdout, stderr = io.StringIO(), io.StringIO()
         try:
             with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
@@ -266,8 +286,11 @@ class ExampleRunner:
             printed = stdout.getvalue() + stderr.getvalue()
             if printed:
                 trace = "output before the failure:\n" + printed.rstrip("\n") + "\n" + trace
-            raise WeaveError(f"{block.location}: example '{block.name}' failed:\n{trace.rstrip()}") from None
+            raise ExampleFailure(trace.rstrip(), failing_line(error, code.co_filename)) from None
         result = Result(self.clean(stdout.getvalue()), self.clean(stderr.getvalue()))
+        if self.figures is None:
+            self.new_figures(namespace)  # closed, not kept
+            return result
         after = folder_state(self.figures)
         written = sorted(name for name, state in after.items() if before.get(name) != state)
         for name in written:
@@ -285,6 +308,23 @@ class ExampleRunner:
             name = f"{base}-{k}.png" if k > 1 else f"{base}.png"
             result.figures.append(self.save(figure, name))
         return result
+
+    def evaluate(self, value: tangle.InlineValue, namespace: dict, alone: bool) -> str:
+        """The text of an inline value: ``str`` of the expression's value, Markdown; several lines
+        (a table, a list) only for a value that stands alone on its line."""
+        source = "\n" * (value.location.line - 1) + value.expression
+        try:
+            code = compile(source, str(self.root / value.location.file), "eval")
+            text = str(eval(code, namespace)).strip("\n")
+        except Exception as error:
+            trace = "".join(traceback.format_exception(type(error), error, error.__traceback__.tb_next))
+            raise ExampleFailure(trace.rstrip()) from None
+        if "\n" in text and not alone:
+            raise ExampleFailure(f"its value has several lines ({text[:60]!r}...); a value of several lines "
+                                 "(a table, a list) must stand alone on its line of the text")
+        if "`{python}" in text:
+            raise ExampleFailure("its value holds an inline value itself")
+        return text
 
     def clean(self, text: str) -> str:
         """Printed output with the paths that change from run to run made the same.
@@ -333,12 +373,217 @@ class ExampleRunner:
         self.seen_figures.clear()
 
 
+# --------------------------------------------------------------------------------------------
+# A document read from top to bottom: its examples and inline values in one namespace
+
+
+BUILTIN_NAMES = frozenset(dir(builtins))
+
+
+def module_names(source: str, mode: str = "exec", after: int = 0) -> tuple[set[str], set[str]]:
+    """Names a piece of code binds in the module namespace, and names it reads there before binding
+    them (its inputs).  Static, statement by statement, so a failed example's names are known even
+    though it never bound them; ``after``: only the bindings of the top-level statements that end on
+    or after that line of ``source`` (those a failure at that line left undone)."""
+    tree = ast.parse(source, mode=mode)
+    bound: set[str] = set()
+    needed: set[str] = set()
+    if mode == "eval":
+        names_of(ast.Expression(tree.body), bound, needed)
+    undone: set[str] = set()
+    for statement in getattr(tree, "body", []) if mode == "exec" else []:
+        statement_names(statement, bound, needed)
+        if after and statement.end_lineno >= after:
+            undone |= module_names(ast.unparse(statement))[0]
+    return (undone if after else bound), needed - BUILTIN_NAMES
+
+
+def statement_names(statement: ast.stmt, bound: set[str], needed: set[str]) -> None:
+    """Add a statement's module-level bindings and its reads of names not bound before them."""
+    if isinstance(statement, (ast.For, ast.AsyncFor)):
+        names_of(ast.Expression(statement.iter), bound, needed)
+        names_of(ast.Assign([statement.target], ast.Constant(None), lineno=0), bound, needed)
+        parts = [statement.body, statement.orelse]
+    elif isinstance(statement, (ast.With, ast.AsyncWith)):
+        for item in statement.items:
+            names_of(ast.Expression(item.context_expr), bound, needed)
+            if item.optional_vars is not None:
+                names_of(ast.Assign([item.optional_vars], ast.Constant(None), lineno=0), bound, needed)
+        parts = [statement.body]
+    elif isinstance(statement, (ast.If, ast.While)):
+        names_of(ast.Expression(statement.test), bound, needed)
+        parts = [statement.body, statement.orelse]
+    elif isinstance(statement, ast.Try):
+        for handler in statement.handlers:
+            if handler.type is not None:
+                names_of(ast.Expression(handler.type), bound, needed)
+        parts = [statement.body, *(h.body for h in statement.handlers), statement.orelse, statement.finalbody]
+        bound.update(h.name for h in statement.handlers if h.name)
+    else:
+        names_of(statement, bound, needed)
+        return
+    for part in parts:
+        for inner in part:
+            statement_names(inner, bound, needed)
+
+
+def names_of(node: ast.AST, bound: set[str], needed: set[str]) -> None:
+    expression = isinstance(node, ast.Expression)
+    source = ast.unparse(ast.fix_missing_locations(node.body if expression else node))
+    table = symtable.symtable(source, "<example>", "eval" if expression else "exec")
+    reads, binds = global_names(table, top=True)
+    needed |= reads - bound
+    bound |= binds
+
+
+def global_names(table: symtable.SymbolTable, top: bool) -> tuple[set[str], set[str]]:
+    """(read, bound) module-level names of a symbol table and the tables nested in it."""
+    reads, binds = set(), set()
+    for symbol in table.get_symbols():
+        name = symbol.get_name()
+        in_module = top or symbol.is_global()
+        if in_module and symbol.is_referenced():
+            reads.add(name)
+        if in_module and (symbol.is_assigned() or symbol.is_imported()) and (top or symbol.is_declared_global()):
+            binds.add(name)
+    for child in table.get_children():
+        child_reads, child_binds = global_names(child, top=False)
+        reads |= child_reads
+        binds |= child_binds
+    return reads, binds
+
+
+@dataclasses.dataclass
+class Outcome:
+    """What became of an example or an inline value."""
+
+    status: str  # "ok", "failed" or "skipped"
+    message: str = ""  # the traceback of a failure, the reason of a skip
+    result: Result | None = None  # an example's output and figures
+    value: str | None = None  # an inline value's text
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+
+def run_order(document: tangle.Document) -> list:
+    """The examples and inline values of a document in the order they run: reading order, except
+    that an inline value that reads a name no example above it binds runs right after the example
+    below it that binds the last such name (the text may state a result before the example that
+    computes it)."""
+    units = document.runnable()
+    binds = [module_names("\n".join(u.lines))[0] if isinstance(u, tangle.Block) else set() for u in units]
+    order, waiting, seen = [], [], set()  # waiting: [value, the names it still waits for]
+    for k, unit in enumerate(units):
+        if isinstance(unit, tangle.InlineValue):
+            try:
+                needed = module_names(unit.expression, "eval")[1]
+            except SyntaxError:
+                needed = set()  # evaluating it reports the error
+            missing = (needed - seen) & set().union(*binds[k:])
+            if missing:
+                waiting.append([unit, missing])
+            else:
+                order.append(unit)
+            continue
+        order.append(unit)
+        seen |= binds[k]
+        for entry in waiting:
+            entry[1] -= binds[k]
+        order += [value for value, missing in waiting if not missing]
+        waiting = [entry for entry in waiting if entry[1]]
+    return order + [value for value, _ in waiting]
+
+
+def unit_title(unit) -> str:
+    if isinstance(unit, tangle.Block):
+        return f"example '{unit.name}'"
+    return f"inline value `{{python}} {unit.expression}`"
+
+
+class DocumentRun:
+    """Runs a document's examples and inline values in reading order, in one namespace.
+
+    One failure is one failure: a later unit that reads a name the failed one binds (directly, or
+    through a unit skipped for that reason) is skipped, naming the failure; the others still run.
+    """
+
+    def __init__(self, document: tangle.Document, runner: ExampleRunner, anchors: dict | None = None):
+        self.document = document
+        self.runner = runner
+        self.anchors = anchors or {}
+        self.namespace: dict = {"__name__": f"example:{document.path}"}
+        self.units = run_order(document)
+        self.lines = dict(document.text_lines())
+        self.outcomes: list[Outcome] = []
+        self.unavailable: dict[str, str] = {}  # name -> the failed unit that was to bind it
+
+    def run_until(self, index: int) -> Outcome:
+        """The outcome of unit ``index``, running the units before it first if they have not run."""
+        while len(self.outcomes) <= index:
+            self.outcomes.append(self.run_next(self.units[len(self.outcomes)]))
+        return self.outcomes[index]
+
+    def run_all(self) -> list[Outcome]:
+        if self.units:
+            self.run_until(len(self.units) - 1)
+        self.runner.close_all()
+        return self.outcomes
+
+    def run_next(self, unit) -> Outcome:
+        example = isinstance(unit, tangle.Block)
+        source = "\n".join(unit.lines) if example else unit.expression
+        try:
+            bound, needed = module_names(source, "exec" if example else "eval")
+        except SyntaxError:
+            bound, needed = set(), set()  # compiling it reports the error with its line
+        missing = sorted(needed & self.unavailable.keys())
+        if missing:
+            causes = sorted({self.unavailable[name] for name in missing})
+            outcome = Outcome("skipped", f"it reads {', '.join(missing)}, which {' and '.join(causes)} "
+                                         "did not define")
+        else:
+            try:
+                if example:
+                    base = Path(self.document.path).stem + "-" + self.anchor(unit)
+                    outcome = Outcome("ok", result=self.runner.run(unit, self.namespace, base))
+                else:
+                    line = self.lines[unit.location.line]
+                    alone = line.strip() == line[unit.start:unit.end]
+                    outcome = Outcome("ok", value=self.runner.evaluate(unit, self.namespace, alone))
+            except ExampleFailure as failure:
+                outcome = Outcome("failed", str(failure))
+                if example and failure.line is not None:  # what ran before the failing statement stands
+                    bound = module_names(source, after=failure.line - unit.body_location.line + 1)[0]
+        if not outcome.ok:
+            cause = f"{unit_title(unit)} ({unit.location})"
+            if outcome.status == "skipped":
+                root = self.unavailable[missing[0]]
+                cause += f", skipped because of {root.split(', skipped because of ')[-1]},"
+            self.unavailable.update((name, cause) for name in bound)
+        return outcome
+
+    def anchor(self, block: tangle.Block) -> str:
+        return self.anchors.get(block.location, "example-" + slug(block.name)).removeprefix("example-")
+
+    def problems(self) -> list[str]:
+        """One message per unit that failed or was skipped, with its file:line."""
+        return [f"{unit.location}: {unit_title(unit)} {outcome.status}"
+                + (f":\n{outcome.message}" if outcome.status == "failed" else f": {outcome.message}")
+                for unit, outcome in zip(self.units, self.outcomes) if not outcome.ok]
+
+
 @contextlib.contextmanager
-def example_environment(root: Path, out: Path):
-    """Working directory, import path, IDENT_FIGURES and a non-interactive matplotlib for the examples."""
+def example_environment(root: Path, figures: Path | None):
+    """Working directory, import path, IDENT_FIGURES (if given) and a non-interactive matplotlib for
+    the examples."""
     saved_cwd, saved_path = os.getcwd(), list(sys.path)
     saved_env = {k: os.environ.get(k) for k in ("IDENT_FIGURES", "MPLBACKEND", "SOURCE_DATE_EPOCH")}
-    os.environ["IDENT_FIGURES"] = str(out / "figures")
+    if figures is not None:
+        os.environ["IDENT_FIGURES"] = str(figures)
+    else:
+        os.environ.pop("IDENT_FIGURES", None)
     os.environ["MPLBACKEND"] = "Agg"
     os.environ["SOURCE_DATE_EPOCH"] = "0"  # no dates in PDF/PS figures an example might write
     if (root / "src").is_dir():
@@ -446,6 +691,7 @@ class PageRenderer:
         self.formatter = HtmlFormatter(nowrap=True)
         self.blocks = {b.location.line: b for b in document.items if isinstance(b, tangle.Block)}
         self.rendered: set[int] = set()
+        self.figure_count = 0  # figures on the page so far
         self.md = make_markdown()
         rules = self.md.renderer.rules  # bound methods: add_render_rule would rebind them to the renderer
         rules["fence"] = self.render_fence
@@ -583,21 +829,28 @@ class PageRenderer:
             if result.stderr:
                 parts.append(f'<pre class="output stderr" aria-label="standard error">'
                              f'{html.escape(result.stderr.rstrip())}</pre>')
-            for k, figure in enumerate(result.figures, start=1):
-                parts.append(self.render_figure(figure, f"Figure {k} of the example “{block.name}”"))
+            captions = [match["caption"] for match in map(CAPTION.match, block.lines) if match]
+            for k, figure in enumerate(result.figures):
+                self.figure_count += 1
+                caption = captions[k] if k < len(captions) else block.name
+                parts.append(self.render_figure(figure, self.figure_count, caption))
         parts.append("</div>")
         return "\n".join(parts) + "\n"
 
-    def render_figure(self, figure: Figure, caption: str) -> str:
+    def render_figure(self, figure: Figure, number: int, caption: str) -> str:
+        """A figure with its number on the page and its caption (Markdown, from ``# caption:``)."""
         source = html.escape(figure.path)
         if Path(figure.path).suffix.lower() not in IMAGE_SUFFIXES:
             return f'<p class="figure-link"><a href="{source}">{html.escape(Path(figure.path).name)}</a></p>'
         size = f' width="{figure.width}" height="{figure.height}"' if figure.width and figure.height else ""
-        return (f'<figure class="example-figure"><a href="{source}"><img src="{source}"{size} '
-                f'alt="{html.escape(caption)}"></a><figcaption>{html.escape(caption)}</figcaption></figure>')
+        text = self.md.renderInline(caption)
+        alt = re.sub(r"<[^>]+>", "", text)
+        return (f'<figure class="example-figure" id="figure-{number}"><a href="{source}"><img src="{source}"{size} '
+                f'alt="{html.escape(alt)}"></a><figcaption><span class="figure-number">Figure {number}.</span> '
+                f"{text}</figcaption></figure>")
 
     def render(self) -> "Page":
-        text = self.weave.texts[self.document.path].replace("\r\n", "\n").replace("\r", "\n")
+        text, values = self.weave.text_with_values(self.document.path, marked=True)
         env: dict = {}
         tokens = self.md.parse(text, env)
         for token in tokens:  # inline tokens have no line of their own: give them their block's
@@ -613,13 +866,23 @@ class PageRenderer:
         title_end = next((k for k, t in enumerate(tokens) if t.type == "heading_close" and t.tag == "h1"), -1)
         head = self.md.renderer.render(tokens[:title_end + 1], self.md.options, env)
         body = self.md.renderer.render(tokens[title_end + 1:], self.md.options, env)
+        for k, (expression, value) in enumerate(values):  # values of several lines, rendered as Markdown
+            placeholder = f"<p>{BLOCK_PLACEHOLDER.format(k)}</p>"
+            if placeholder not in body:
+                raise WeaveError(f"{self.document.path}: the value of `{{python}} {expression}` has several "
+                                 "lines; give it a paragraph of its own (blank lines before and after)")
+            body = body.replace(placeholder, f'<div class="computed" title="{html.escape(expression)}">\n'
+                                             f"{self.md.render(value)}</div>")
         missing = [b for line, b in self.blocks.items() if b.kind != "display" and line not in self.rendered]
         if missing:
             raise WeaveError(f"{missing[0].location}: the Markdown parser did not read this {missing[0].kind} "
                              "as a fenced code block; start its fence at column 0 outside lists and quotes")
         title = next((plain for level, _, _, plain in headings if level == 1), Path(self.page).stem)
         headings = [(level, anchor, label) for level, anchor, label, _ in headings]
-        return Page(self.document, self.page, title, headings, head, body)
+        first_section = next((k for k, t in enumerate(tokens) if k > title_end and t.type == "heading_open"
+                              and t.tag == "h2"), len(tokens))
+        front = self.md.renderer.render(tokens[title_end + 1:first_section], self.md.options, env)
+        return Page(self.document, self.page, title, headings, head, body, front)
 
 
 def wide(lines: list[str]) -> str:
@@ -655,6 +918,7 @@ class Page:
     headings: list[tuple[int, str, str]]  # level, id, label (HTML)
     head: str  # the HTML up to and including the title
     body: str
+    front: str = ""  # the HTML between the title and the first section: the abstract of the first page
 
 
 # --------------------------------------------------------------------------------------------
@@ -719,10 +983,12 @@ nav.toc ul { margin: .2em 0; padding-left: 1.2em; } nav.toc li { margin: .1em 0;
 pre.output { background: #fff; border-left: 3px solid #8c959f; border-radius: 0; max-height: 32em; }
 pre.stderr { border-left-color: #bf8700; color: #6e4b00; }
 figure { margin: .8em 0 1.2em; } figcaption { font-size: .85em; color: var(--muted); }
+.figure-number { font-weight: 600; color: var(--text); }
 ul.chunk-index { list-style: none; padding-left: 0; font-size: .95em; }
 ul.chunk-index li { margin: .15em 0; padding-left: 1.5em; text-indent: -1.5em; }
 .api-table .kind { font-size: .85em; }
 .api-table td:last-child { min-width: 12em; }
+span.computed { border-bottom: 1px dotted var(--muted); }
 .muted, footer { color: var(--muted); }
 footer { font-size: .85em; margin-top: 3em; }
 footer p { border-top: 1px solid var(--rule); padding: .6em 0 2em; margin: 0; }
@@ -744,11 +1010,32 @@ class Weave:
         self.warnings: list[str] = []
         self.math_count = 0
         # the text is read once: pages, examples and notebooks all come from this snapshot
-        self.texts = {path.relative_to(self.root).as_posix(): path.read_text(encoding="utf-8")
-                      for path in tangle.literate_files(self.root)}
+        self.texts = {relative: tangle.read_literate(path, relative).removeprefix("\ufeff")
+                      for path in tangle.literate_files(self.root)
+                      for relative in [path.relative_to(self.root).as_posix()]}
         self.web = tangle.build_web([tangle.parse_document(text, path) for path, text in self.texts.items()])
         self.xref = cross_references(self.web)
         self.stems = {Path(d.path).stem for d in self.web.documents}
+        self.values: dict[str, dict] = {}  # document -> (line, start, end) of an inline value -> its text
+
+    def text_with_values(self, path: str, marked: bool) -> tuple[str, list[tuple[str, str]]]:
+        """A document's text with each inline value replaced by its value, and the values of several
+        lines.  ``marked`` (for the page): a value inside a span whose title is the expression, so
+        that the page tells where a number comes from, and a value of several lines as a placeholder
+        line (the lines of the page must stay those of the text), with its (expression, Markdown)."""
+        lines = self.texts[path].replace("\r\n", "\n").replace("\r", "\n").split("\n")
+        blocks = []
+        for (line, start, end), value in sorted(self.values.get(path, {}).items(), reverse=True):
+            expression = tangle.INLINE_VALUE.match(lines[line - 1], start)["expression"].strip()
+            if not marked:
+                shown = value
+            elif "\n" in value:
+                shown = BLOCK_PLACEHOLDER.format(len(blocks))
+                blocks.append((expression, value))
+            else:
+                shown = f'<span class="computed" title="{html.escape(expression)}">{value}</span>'
+            lines[line - 1] = lines[line - 1][:start] + shown + lines[line - 1][end:]
+        return "\n".join(lines), blocks
 
     def warn(self, message: str) -> None:
         if message in self.warnings:
@@ -757,19 +1044,46 @@ class Weave:
         print(message, file=sys.stderr)
 
     def run(self) -> dict:
+        """Weave into a new folder beside the output folder; install it only if every example ran."""
         started = time.perf_counter()
         outputs, _ = tangle.tangle(self.root)
         stale = tangle.differences(self.root, outputs)
         if stale:
             self.warn("weave: warning: src/ident is out of date with literate/ (run python tangle.py); "
                       "the examples run against it: " + "; ".join(stale))
-        self.clean_output()
-        runner = ExampleRunner(self.root, self.out)
-        results: dict = {}
-        with example_environment(self.root, self.out):
-            for document in self.web.documents:
-                results[document.path] = runner.run_document(document, self.xref.examples)
+        self.out.parent.mkdir(parents=True, exist_ok=True)
+        self.build = Path(tempfile.mkdtemp(prefix=f".{self.out.name}-weave-", dir=self.out.parent))
+        try:
+            summary = self.weave_into_build()
+            self.install()
+        finally:
+            shutil.rmtree(self.build, ignore_errors=True)
+        summary["seconds"] = time.perf_counter() - started
+        return summary
+
+    def run_examples(self) -> dict[str, DocumentRun]:
+        """Every document's examples and inline values; a WeaveError naming each one that failed."""
+        runner = ExampleRunner(self.root, self.build)
+        runs, problems = {}, []
+        for document in self.web.documents:
+            runs[document.path] = DocumentRun(document, runner, self.xref.examples)
+            runs[document.path].run_all()
+            problems += runs[document.path].problems()
+        if problems:
+            raise WeaveError(f"{len(problems)} example(s) or inline value(s) did not run; docs/ is left as "
+                             "it was:\n" + "\n".join(problems))
+        return runs
+
+    def weave_into_build(self) -> dict:
+        (self.build / "figures").mkdir()
+        with example_environment(self.root, self.build / "figures"):
+            runs = self.run_examples()
             api = self.public_names()
+        results = {path: {unit.location: outcome.result for unit, outcome in zip(run.units, run.outcomes)
+                          if isinstance(unit, tangle.Block)} for path, run in runs.items()}
+        self.values = {path: {(unit.location.line, unit.start, unit.end): outcome.value
+                              for unit, outcome in zip(run.units, run.outcomes)
+                              if isinstance(unit, tangle.InlineValue)} for path, run in runs.items()}
         pages = [PageRenderer(self, d, results[d.path]).render() for d in self.web.documents]
         self.write("style.css", self.stylesheet())
         for k, page in enumerate(pages):
@@ -785,25 +1099,42 @@ class Weave:
                     notebooks.append(notebook)
         figures = sum(len(r.figures) for by_doc in results.values() for r in by_doc.values())
         self.math_count = sum(page.body.count("<math ") + page.head.count("<math ") for page in pages)
-        return {"pages": len(pages), "figures": figures, "notebooks": len(notebooks),
-                "math": self.math_count, "seconds": time.perf_counter() - started,
-                "examples": sum(len(r) for r in results.values())}
+        return {"pages": len(pages), "figures": figures, "notebooks": len(notebooks), "math": self.math_count,
+                "examples": sum(len(r) for r in results.values()),
+                "values": sum(len(v) for v in self.values.values())}
 
     # files
-    def clean_output(self) -> None:
-        """Remove what an earlier weave wrote (and nothing else) from the output folder."""
-        self.out.mkdir(parents=True, exist_ok=True)
-        for folder in ("figures", "notebooks"):
-            if (self.out / folder).is_dir():
-                shutil.rmtree(self.out / folder)
+    def owned(self) -> set[str]:
+        """What an earlier weave wrote into the output folder (and nothing else there)."""
+        if not self.out.is_dir():
+            return set()
+        found = {p.relative_to(self.out).as_posix() for folder in ("figures", "notebooks")
+                 for p in (self.out / folder).rglob("*") if p.is_file()}
+        found |= {"style.css"} if (self.out / "style.css").is_file() else set()
         for path in self.out.glob("*.html"):
             with path.open(encoding="utf-8", errors="replace") as handle:
                 if f'<meta name="generator" content="{GENERATOR}">' in handle.read(2000):
-                    path.unlink()
-        (self.out / "figures").mkdir()
+                    found.add(path.name)
+        return found
+
+    def install(self) -> None:
+        """Move the new files into the output folder, leave unchanged ones untouched, and remove what
+        an earlier weave wrote that this one did not; other files there (docs/daisy/) stay."""
+        new = {p.relative_to(self.build).as_posix() for p in self.build.rglob("*") if p.is_file()}
+        for name in sorted(new):
+            target = self.out / name
+            if target.is_file() and target.read_bytes() == (self.build / name).read_bytes():
+                continue
+            target.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(self.build / name, target)
+        for name in sorted(self.owned() - new):
+            (self.out / name).unlink()
+        for folder in ("figures", "notebooks"):
+            if (self.out / folder).is_dir() and not any((self.out / folder).iterdir()):
+                (self.out / folder).rmdir()
 
     def write(self, name: str, text: str) -> None:
-        path = self.out / name
+        path = self.build / name
         path.parent.mkdir(parents=True, exist_ok=True)
         with path.open("w", encoding="utf-8", newline="\n") as handle:
             handle.write(text)
@@ -873,12 +1204,13 @@ class Weave:
 
     def index_html(self, pages: list[Page], api: list[dict]) -> str:
         intro = pages[0].title if pages else "ident"
-        parts = ["<h1>ident: the literate program</h1>",
-                 f"<p><em>{html.escape(intro)}</em>, after I. Markovsky. This is the literate program "
-                 "of the Python package <code>ident</code>, woven from the Markdown documents in "
-                 "<code>literate/</code>: the text with its mathematics, the code chunks of the package with "
-                 "their cross references, and the examples with their output as they ran when this was "
-                 "written.</p>",
+        parts = [f"<h1>{html.escape(intro)}</h1>",
+                 pages[0].front if pages else "",
+                 f'<p class="muted">This is the literate program of the Python package <code>ident</code>, '
+                 "woven from the Markdown documents in <code>literate/</code>: the text with its mathematics, "
+                 "the code chunks of the package with their cross references, and the examples with their "
+                 f'output as they ran when this was woven. <a href="{pages[0].file if pages else "#"}">'
+                 "Start reading</a>.</p>",
                  '<nav class="toc" aria-label="contents"><h2>Contents</h2>\n<ol>']
         for page in pages:
             sub = self.toc_html(page.headings, page.file, with_page=True, levels=(2,))
@@ -1003,7 +1335,7 @@ class Weave:
         import nbformat
 
         try:
-            notebook = jupytext.reads(self.texts[document.path], fmt="md")
+            notebook = jupytext.reads(self.text_with_values(document.path, marked=False)[0], fmt="md")
         except Exception as error:
             self.warn(f"{document.path}: warning: jupytext cannot read it, no notebook: {error}")
             return None
@@ -1039,7 +1371,7 @@ class Weave:
                 outputs.append(nbformat.v4.new_output("stream", name=stream, text=text))
         for figure in result.figures:
             suffix = Path(figure.path).suffix.lower()
-            data = (self.out / figure.path).read_bytes()
+            data = (self.build / figure.path).read_bytes()
             if suffix == ".svg":
                 bundle = {"image/svg+xml": data.decode("utf-8")}
             elif suffix in MIME:
@@ -1071,7 +1403,8 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
         return 1
     print(f"weave: wrote {out}: {summary['pages']} pages and index.html, {summary['examples']} examples run, "
-          f"{summary['figures']} figures, {summary['notebooks']} notebooks, {summary['math']} formulas "
+          f"{summary['values']} inline values, {summary['figures']} figures, {summary['notebooks']} notebooks, "
+          f"{summary['math']} formulas "
           f"in {summary['seconds']:.1f} s")
     return 0
 

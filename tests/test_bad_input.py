@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import traceback
+import warnings
 
 import control
 import numpy as np
@@ -21,6 +22,27 @@ W_WITH_NAN = np.where(np.arange(180).reshape(60, 3) == 7, np.nan, W)
 W_WITH_INF = np.where(np.arange(180).reshape(60, 3) == 7, np.inf, W)
 STRUCTURE = Structure.time_major(3, 1, [59])
 P = STRUCTURE.params_from_series([W])
+MASK = np.arange(180).reshape(60, 3) == 17  # sample 5, variable 2
+W_MASKED = np.ma.masked_array(W, mask=MASK)
+W_ZERO_INPUT = np.hstack([np.zeros((60, 1)), W[:, 1:]])
+SYS_COMPLEX = random_system(1, 2, 1, RNG)
+SYS_COMPLEX.A = SYS_COMPLEX.A * (1 + 1e-3j)  # python-control keeps a complex A set after construction
+SYS_NAN = control.ss(SYS.A * np.nan, SYS.B, SYS.C, SYS.D, 1)
+
+
+def unstable_exact_data(n_samples: int = 300) -> np.ndarray:
+    """Exact data of y(t+1) = 1.5 y(t) + u(t): the outputs grow to about 1e52."""
+    u = np.random.default_rng(1).standard_normal(n_samples)
+    y = np.zeros(n_samples)
+    for t in range(n_samples - 1):
+        y[t + 1] = 1.5 * y[t] + u[t]
+    return np.column_stack([u, y])
+
+
+def noncausal_data() -> np.ndarray:
+    """w = [u(t), u(t+1)]: with the first variable as input the second would need a future input."""
+    u = np.random.default_rng(2).standard_normal(101)
+    return np.column_stack([u[:-1], u[1:]])
 
 CASES = [
     ('1-D w', lambda: ident(np.ones(50), 1, 1),
@@ -127,6 +149,76 @@ CASES = [
     ("slra disp", lambda: slra(P, STRUCTURE, 5, disp="loud"), ValueError, "disp must be"),
     ("slra R0 shape", lambda: slra(P, STRUCTURE, 5, R0=np.ones((1, 5))), ValueError, "R must have d = 6 columns, got 5"),
     ("kernel_misfit R rank", lambda: kernel_misfit(P, STRUCTURE, np.ones((2, 6))), ValueError, "full row rank"),
+    # masked arrays: the mask means missing, and missing data are refused (never the values under it)
+    ('masked w', lambda: ident(W_MASKED, 1, 1),
+     ValueError, 'w holds 1 non-finite value.*masked.*first at sample 5, variable 2'),
+    ('masked series in a list', lambda: ident([W[:30], W_MASKED], 1, 1),
+     ValueError, 'w\\[1\\] holds 1 non-finite value.*first at sample 5, variable 2'),
+    ('masked 3-d w', lambda: ident(np.ma.masked_array(np.dstack([W, W]), mask=np.dstack([MASK, ~MASK & False]) ), 1, 1),
+     ValueError, 'w\\[:, :, 0\\] holds 1 non-finite'),
+    ('masked wini', lambda: ident(W, 1, 1, wini=[np.ma.masked_array(np.zeros((1, 3)), mask=[[0, 1, 0]])]),
+     ValueError, 'wini\\[0\\] holds 1 non-finite value.*masked'),
+    ('masked sys0 kernel', lambda: ident(W, 1, 1, sys0=np.ma.masked_array(np.eye(2, 6), mask=np.eye(2, 6) > 0)),
+     ValueError, 'sys0 as a kernel parameter R must be a finite .* with NaN or inf'),
+    ('masked complex w', lambda: ident(np.ma.masked_array(W + 0j, mask=MASK), 1, 1),
+     TypeError, 'w must hold real numbers, got a masked array of dtype complex128'),
+    # ragged nested lists
+    ('ragged series', lambda: ident([W.tolist(), [[1.0, 2.0, 3.0], [4.0, 5.0]]], 1, 1),
+     ValueError, 'w\\[1\\] is a ragged nested sequence'),
+    ('ragged wini entry', lambda: ident(W, 1, 1, wini=[[[0.0, 0.0, 0.0], [1.0, 2.0]]]),
+     ValueError, 'wini\\[0\\] is a ragged nested sequence'),
+    ('wini as rows for one series', lambda: ident(W, 1, 2, wini=[[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]),
+     ValueError, 'wini has 2 entries but w has N = 1 series \\(for one series give an ell x q array'),
+    ('ragged exct', lambda: ident(W, 1, 1, exct=[[0], [1, 2]]),
+     ValueError, 'exct is a ragged nested sequence'),
+    # exact variables: at most m of them (exact outputs are fine, see the tests below)
+    ('exct more than m', lambda: ident(W, 1, 1, exct=[0, 1]),
+     ValueError, 'exct marks 2 variables exact, but a model with m = 1 inputs.*at most 1 can be exact'),
+    ('exct autonomous', lambda: ident(W, 0, 1, exct=[2]),
+     ValueError, 'exct marks 1 variables exact, but a model with m = 0 inputs'),
+    ('misfit exact outputs the model cannot meet', lambda: misfit(W, SYS, exct=[1, 2]),
+     ValueError, 'exct: no trajectory of sysh meets the exact values of series 0'),
+    # sys0 and sysh: real, finite, of full row rank, feasible; named as the caller's argument
+    ('sys0 rank deficient', lambda: ident(W, 1, 1, sys0=np.ones((2, 6))),
+     ValueError, 'sys0 gives a kernel R of rank 1, but a model with p = 2 outputs needs 2 independent rows'),
+    ('sys0 complex kernel', lambda: ident(W, 1, 1, sys0=np.eye(2, 6) + 1e-3j),
+     TypeError, 'sys0 as a kernel parameter R must hold real numbers, got dtype complex128'),
+    ('sys0 nan kernel', lambda: ident(W, 1, 1, sys0=np.where(np.eye(2, 6) > 0, np.nan, 0.0)),
+     ValueError, 'sys0 as a kernel parameter R must be a finite.*with NaN or inf'),
+    ('sys0 nan model', lambda: ident(W, 1, 1, sys0=SYS_NAN),
+     ValueError, 'sys0 has non-finite entries \\(NaN or inf\\) in A'),
+    ('sys0 complex model', lambda: ident(W, 1, 1, sys0=SYS_COMPLEX),
+     TypeError, 'sys0 must be a real model; its A is complex'),
+    ('sys0 infeasible for the data', lambda: ident(W[:, :2], 1, 0, exct=[0], sys0=np.array([[1.0, 0.0]])),
+     ValueError, 'sys0 is infeasible for these data'),
+    ('misfit nan model', lambda: misfit(W, SYS_NAN),
+     ValueError, 'sysh has non-finite entries \\(NaN or inf\\) in A'),
+    ('misfit complex model', lambda: misfit(W, SYS_COMPLEX),
+     TypeError, 'sysh must be a real model; its A is complex'),
+    # inputs the data say nothing about, and data that fit every model
+    ('zero input, q = 3', lambda: ident(W_ZERO_INPUT, 1, 1),
+     ValueError, 'variable 0 of w, an input .*is zero in every sample'),
+    ('zero input, SISO', lambda: ident(W_ZERO_INPUT[:, :2], 1, 1),
+     ValueError, 'variable 0 of w, an input .*is zero in every sample'),
+    ('zero input in every series', lambda: ident([np.column_stack([W[:30, 0], 0 * W[:30, 1], W[:30, 2]])] * 2, 2, 1),
+     ValueError, 'variable 1 of w, an input \\(the first m = 2'),
+    ('exact data of an unstable system', lambda: ident(unstable_exact_data(), 1, 1),
+     ValueError, 'variable 0 of w, an input .*is negligible.*as an unstable system'),
+    ('all-zero data with an input', lambda: ident(np.zeros((50, 2)), 1, 1),
+     ValueError, 'variable 0 of w, an input .*is zero in every sample'),
+    ('inputs that cannot be inputs', lambda: ident(noncausal_data(), 1, 1),
+     ValueError, 'the identified model cannot take the first m = 1 variables of w as its inputs'),
+    # sizes are checked before anything of the problem's size is allocated
+    ('ell 1e12 with zero initial conditions', lambda: ident(W, 1, 10**12, wini=0),
+     ValueError, 'w is too short for the model class m = 1, ell = 1000000000000'),
+    ('ell 1e7 with zero initial conditions', lambda: ident(W, 1, 10**7, wini=0),
+     ValueError, 'w is too short for the model class m = 1, ell = 10000000'),
+    ('ell 1e7', lambda: ident(W, 1, 10**7),
+     ValueError, 'series 0 of w has T = 60 samples; a model of lag ell = 10000000 needs'),
+    ('ell 1e7 with zero initial conditions in a list', lambda: ident([W, W], 1, 10**7, wini=[0, None]),
+     ValueError, 'series 1 of w has T = 60 samples'),
+    ('ell beyond any memory', lambda: ident(np.ones((4_000_100, 1)), 0, 2 * 10**6),
+     ValueError, 'ell = 2000000 is too large to solve on this machine'),
 ]
 
 
@@ -158,3 +250,162 @@ def test_inputs_are_not_modified_and_outputs_do_not_alias_them() -> None:
     for s, c in zip(series, copies[1]):
         np.testing.assert_array_equal(s, c)
     np.testing.assert_array_equal(wini[0], copies[2][0])
+
+
+# --- extreme scales: the problem is scale-invariant, and so are the answers ----------------------
+
+def noisy_data() -> np.ndarray:
+    rng = np.random.default_rng(7)
+    system = random_system(1, 2, 1, rng)
+    u = rng.standard_normal((60, 1))
+    from ident.representations import simulate
+    return np.hstack([u, simulate(system, u, rng.standard_normal(2))]) + 0.1 * rng.standard_normal((60, 3))
+
+
+W_NOISY = noisy_data()
+REFERENCE = ident(W_NOISY, 1, 1)
+
+
+@pytest.mark.parametrize("exponent", [-1000, -560, -300, 300, 510, 1000])
+def test_scaling_by_a_power_of_two_scales_the_answers_exactly(exponent) -> None:
+    """A power of two is exact in floating point, so the scaled problem is the same problem."""
+    sysh0, info0, wh0, xini0 = REFERENCE
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sysh, info, wh, xini = ident(np.ldexp(W_NOISY, exponent), 1, 1)
+    np.testing.assert_allclose(sysh.A, sysh0.A, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(info.Rh, info0.Rh, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(wh, np.ldexp(wh0, exponent), rtol=1e-12, atol=0)
+    np.testing.assert_allclose(xini, np.ldexp(xini0, exponent), rtol=1e-12, atol=0)
+    assert info.converged and info.iter == info0.iter
+    with np.errstate(all="ignore"):
+        expected = np.ldexp(info0.M, 2 * exponent)  # c^2 M in floating point
+    if 0 < expected < np.inf:
+        assert info.M == pytest.approx(expected, rel=1e-12) and not caught
+    else:  # c^2 M overflows or underflows, as it does in any floating-point arithmetic, and says so
+        assert info.M == expected
+        assert [str(w.message) for w in caught if "beyond the floating-point range" in str(w.message)]
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-200, 1e-170, 1e-160, 1e-100, 1e100, 1e154, 1e155, 1e200, 1e300])
+def test_extreme_scales_give_the_same_model_and_never_nan(scale) -> None:
+    sysh0, info0, _, _ = REFERENCE
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sysh, info, wh, _ = ident(scale * W_NOISY, 1, 1)
+    assert info.converged and "zero misfit" not in info.message and not np.isnan(info.M)
+    np.testing.assert_allclose(sysh.A, sysh0.A, rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(wh / scale, REFERENCE[2], rtol=1e-6, atol=1e-8)
+    exact = info0.M * scale * scale  # in floating point: inf, a subnormal or 0 at the ends
+    if np.isfinite(exact) and exact > 1e-300:
+        assert info.M == pytest.approx(exact, rel=1e-8)
+        assert not [w for w in caught if issubclass(w.category, RuntimeWarning)]
+    else:
+        assert info.M in (0.0, np.inf) or info.M == pytest.approx(exact, rel=1e-3)
+        if info.M in (0.0, np.inf):
+            assert any("beyond the floating-point range" in str(w.message) for w in caught)
+
+
+def test_noisy_tiny_data_are_not_called_exact() -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        _, info, _, _ = ident(1e-200 * W_NOISY, 1, 1)
+    assert info.converged and info.message == REFERENCE[1].message
+
+
+def test_all_zero_data_under_floating_point_errors_as_exceptions() -> None:
+    with np.errstate(all="raise"):
+        for ell in (0, 1, 2):  # autonomous: every model fits zero data; any is a correct answer
+            sysh, info, wh, xini = ident(np.zeros((50, 2)), 0, ell)
+            assert info.M == 0 and info.converged and np.all(wh == 0) and np.all(xini == 0)
+        with pytest.raises(ValueError, match="variable 0 of w, an input .*zero in every sample"):
+            ident(np.zeros((50, 2)), 1, 1)
+        exact = REFERENCE[2]  # a trajectory of the identified model: exact data, misfit near zero
+        _, info, _, _ = ident(exact, 1, 1)
+        assert info.converged and info.M <= 1e-20 * np.sum(exact ** 2)
+        _, info, _, _ = ident(W_NOISY * 1e-150, 1, 1)
+        assert info.M == pytest.approx(REFERENCE[1].M * 1e-300, rel=1e-8)
+
+
+# --- masked arrays: a mask without masked entries is no mask; masked entries are missing ----------
+
+def test_a_masked_array_without_masked_entries_is_its_data() -> None:
+    sysh, info, wh, _ = ident(np.ma.masked_array(W_NOISY, mask=False), 1, 1)
+    assert info.M == pytest.approx(REFERENCE[1].M, rel=1e-12) and type(wh) is np.ndarray
+
+
+def test_misfit_never_uses_a_masked_value() -> None:
+    """misfit either refuses missing data, naming w, or treats masked entries as missing (as NaN)."""
+    sysh = REFERENCE[0]
+    masked = np.ma.masked_array(W_NOISY.copy(), mask=np.arange(180).reshape(60, 3) == 40)
+    masked.data[13, 1] = 1e6  # the value under the mask must not count
+    try:
+        M, wh, _ = misfit(masked, sysh)
+    except ValueError as error:
+        assert "w holds 1 non-finite value" in str(error) and "masked" in str(error)
+    else:
+        with_nan = np.where(masked.mask, np.nan, masked.data)
+        assert M == pytest.approx(misfit(with_nan, sysh)[0], rel=1e-9) and M < 1e3
+
+
+def test_validation_refuses_masked_outputs() -> None:
+    from ident.validation import fit_percent, validate
+    y = np.ma.masked_array(np.ones((10, 1)), mask=np.arange(10)[:, None] == 3)
+    with pytest.raises(ValueError, match="y holds NaN, inf or masked values"):
+        fit_percent(y, np.ones((10, 1)))
+    with pytest.raises(ValueError, match="u and y must be finite"):
+        validate(SYS, np.ma.masked_array(np.ones((10, 1)), mask=np.arange(10)[:, None] == 3), np.ones((10, 2)))
+
+
+# --- what only the solver sees, in the caller's terms ---------------------------------------------
+
+def test_exact_outputs_are_allowed() -> None:
+    _, info, wh, _ = ident(W_NOISY, 1, 1, exct=[2])
+    assert info.converged and np.array_equal(wh[:, 2], W_NOISY[:, 2])
+
+
+def test_infeasible_starts_are_reported_in_the_callers_terms(monkeypatch) -> None:
+    import ident.identification as identification
+    from ident.slra import InfeasibleKernelError
+
+    def infeasible(*args, **kwargs):
+        raise InfeasibleKernelError("no feasible initial kernel; unstructured LRA: dpbtrf info=4")
+
+    monkeypatch.setattr(identification, "slra", infeasible)
+    with pytest.raises(ValueError, match=r"the data determine no model of the class m = 1, ell = 1 with the exact "
+                                         r"variables exct = \[0\] uncorrected") as caught:
+        ident(W_NOISY, 1, 1, exct=[0])
+    assert "dpbtrf" not in str(caught.value) and isinstance(caught.value.__cause__, InfeasibleKernelError)
+
+
+# --- warnings point at the caller's line ----------------------------------------------------------
+
+def test_non_convergence_warning_points_at_the_callers_line() -> None:
+    from ident.slra import SLRAWarning
+    with pytest.warns(SLRAWarning, match=r"ident: .*info.converged is False") as record:
+        _, info, _, _ = ident(W_NOISY, 1, 2, maxiter=1)
+    assert not info.converged and len(record) == 1
+    assert record[0].filename == __file__, record[0].filename
+
+
+def test_scale_warning_points_at_the_callers_line() -> None:
+    with pytest.warns(RuntimeWarning, match="beyond the floating-point range") as record:
+        ident(1e200 * W_NOISY, 1, 1)
+    assert record[0].filename == __file__, record[0].filename
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-170, 1e160, 1e300])
+def test_validation_fits_are_the_same_at_any_scale(scale) -> None:
+    from ident.representations import simulate
+    from ident.validation import fit_percent, validate
+    rng = np.random.default_rng(11)
+    u = rng.standard_normal((100, 1))
+    y = simulate(SYS, u, rng.standard_normal(2)) + 0.01 * rng.standard_normal((100, 2))
+    reference = validate(SYS, u, y)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no overflow, underflow or invalid value on the way
+        scaled = validate(SYS, scale * u, scale * y)
+        per_output, overall = fit_percent(scale * y, scale * reference.yh)
+    np.testing.assert_allclose(scaled.fit, reference.fit, rtol=1e-9)
+    np.testing.assert_allclose(per_output, reference.fit, rtol=1e-9)
+    np.testing.assert_allclose(scaled.x0 / scale, reference.x0, rtol=1e-8, atol=1e-12)

@@ -62,8 +62,10 @@ def test_identify_from_npz_with_u_and_y_and_default_outputs(tmp_path, capsys, mo
 
 @pytest.mark.parametrize("argv, expected", [
     (["identify", "{csv}", "--inputs", "0", "--outputs", "2"], "required: --lag"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "two"], "invalid int value"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "-1"], "--lag must be"),
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "two"],
+     "argument --lag: must be a non-negative integer, got 'two'"),
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "-1"],
+     "argument --lag: must be a non-negative integer, got -1"),
     (["identify", "{csv}", "--inputs", "0", "--outputs", "9", "--lag", "1"], "--outputs: columns must be among 0..2"),
     (["identify", "{csv}", "--inputs", "speed", "--outputs", "2", "--lag", "1"], "'speed' is neither"),
     (["identify", "{csv}", "--inputs", "0", "--outputs", "0", "--lag", "1"], "share columns"),
@@ -76,9 +78,51 @@ def test_identify_from_npz_with_u_and_y_and_default_outputs(tmp_path, capsys, mo
     (["daisy", "--modes", "ml"], "invalid choice"),
     (["lag", "nowhere"], "neither a data file nor a DAISY data set"),
     (["lag", "{csv}", "--lags", "a-b", "--inputs", "0", "--outputs", "2"], "--lags must look like"),
+    # every option is validated and named (issue 16)
+    (["identify", "{csv}", "--inputs", "0,0", "--outputs", "2", "--lag", "1"],
+     "--inputs: column(s) 'u1' given more than once in '0,0'"),
+    (["identify", "{csv}", "--inputs", "u1,0", "--outputs", "2", "--lag", "1"], "--inputs: column(s) 'u1' given more"),
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "none", "--lag", "1"],
+     "--outputs: 'none' is not possible here (a model needs at least one output)"),
+    (["identify", "{csv}", "--inputs", "2:1", "--outputs", "2", "--lag", "1"], "--inputs: the range '2:1' selects no column"),
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--maxiter", "-1"],
+     "argument --maxiter: must be a non-negative integer, got -1"),
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--tol", "0"],
+     "argument --tol: must be a finite positive number, got 0"),
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--tol", "nan"],
+     "argument --tol: must be a finite positive number, got nan"),
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--holdout", "-0.5"],
+     "argument --holdout: must be a fraction in [0, 1), got -0.5"),
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--plot", "{tmp}/missing/fit.png"],
+     "--plot: the folder {tmp}/missing does not exist"),
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--plot", "{tmp}/fit.xyz"],
+     "--plot: {tmp}/fit.xyz must end in one of"),
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--model", "{tmp}/missing/m.json"],
+     "--model: the folder {tmp}/missing does not exist"),
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--model", "{tmp}"],
+     "--model: {tmp} is a folder; give a file name"),
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--exact", "0,1"],
+     "--exact: at most m = 1 columns can be exact"),
+    (["identify", "{tmp}", "--inputs", "0", "--outputs", "2", "--lag", "1"], "is a folder, not a file"),
+    (["daisy", "erie", "--maxiter", "-1"], "argument --maxiter: must be a non-negative integer, got -1"),
+    (["daisy", "erie", "--tol=-1e-5"], "argument --tol: must be a finite positive number, got -1e-5"),
+    (["daisy", "erie", "--out", "{csv}"], "--out: {csv} is a file, not a folder"),
+    (["lag", "{csv}", "--inputs", "0", "--outputs", "2", "--holdout", "1.5"],
+     "argument --holdout: must be a fraction in [0, 1), got 1.5"),
+    (["lag", "{csv}", "--inputs", "0", "--outputs", "2", "--holdout", "-0.5"], "argument --holdout: must be a fraction"),
+    (["lag", "{csv}", "--inputs", "0", "--outputs", "2", "--maxiter", "-3"], "argument --maxiter: must be a non-negative"),
+    (["lag", "{csv}", "--inputs", "0", "--outputs", "2", "--lags", "5-1"], "--lags must give non-negative lags"),
+    (["lag", "{tmp}", "--inputs", "0", "--outputs", "2"], "is a folder, not a data file"),
+    (["lag", "{csv}", "--inputs", "0", "--outputs", "2", "--plot", "{tmp}/missing/lag.png"],
+     "--plot: the folder {tmp}/missing does not exist"),
 ])
 def test_bad_arguments_exit_2_with_one_line(argv, expected, data_csv, capsys):
-    status, out, err = run([a.replace("{csv}", str(data_csv)) for a in argv], capsys)
+    def filled(text: str) -> str:
+        return text.replace("{csv}", str(data_csv)).replace("{tmp}", str(data_csv.parent))
+    before = sorted(data_csv.parent.iterdir())
+    status, out, err = run([filled(a) for a in argv], capsys)
+    expected = filled(expected)
+    assert sorted(data_csv.parent.iterdir()) == before  # a refused run writes nothing
     assert status == 2
     assert len(err.strip().splitlines()) == 1 and expected in err and "Traceback" not in err
     assert err.startswith("python -m ident")
@@ -151,3 +195,178 @@ def test_build_parser_takes_more_subcommands(capsys):
     demo.set_defaults(handler=lambda args: print(f"demo {args.seed}") or 0)
     assert cli.main(["demo", "--seed", "3"], parser=parser) == 0
     assert capsys.readouterr().out == "demo 3\n"
+
+
+# --- bad data files are refused in the file's own terms, and a failed run writes nothing (issue 16) ---
+
+def npz_data(tmp_path: Path, n_samples: int = 200, **overrides) -> Path:
+    rng = np.random.default_rng(8)
+    system = random_system(1, 1, 1, rng)
+    u = rng.standard_normal(n_samples)
+    arrays = {"u": u, "y": simulate(system, u), **overrides}
+    np.savez(tmp_path / "run.npz", **arrays)
+    return tmp_path / "run.npz"
+
+
+def refused(argv, capsys, expected: str, folder: Path) -> None:
+    before = sorted(folder.iterdir())
+    status, out, err = run(argv, capsys)
+    assert status == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert expected in err, err
+    assert sorted(folder.iterdir()) == before
+
+
+def test_truncated_npz(tmp_path, capsys):
+    path = npz_data(tmp_path)
+    path.write_bytes(path.read_bytes()[:700])
+    refused(["identify", path, "--lag", 1], capsys, "as an .npz archive (damaged or truncated?)", tmp_path)
+
+
+def test_text_under_an_npz_name(tmp_path, capsys):
+    (tmp_path / "run.npz").write_text("1,2\n3,4\n")
+    refused(["identify", tmp_path / "run.npz", "--lag", 1], capsys, "cannot read", tmp_path)
+
+
+def test_complex_npz_is_not_cast(tmp_path, capsys):
+    path = npz_data(tmp_path, y=np.ones(200) * (1 + 2j))
+    refused(["identify", path, "--lag", 1], capsys, "array 'y' of " + str(path) + " holds complex numbers", tmp_path)
+
+
+def test_object_npz_is_refused(tmp_path, capsys):
+    path = tmp_path / "run.npz"
+    np.savez(path, u=np.array([1, "a"], dtype=object), y=np.ones(2))
+    refused(["identify", path, "--lag", 1], capsys, "cannot read", tmp_path)
+
+
+def test_u_and_y_of_different_lengths(tmp_path, capsys):
+    path = npz_data(tmp_path, y=np.ones(199))
+    refused(["identify", path, "--lag", 1], capsys, "u has 200 samples but y has 199", tmp_path)
+
+
+def test_npy_content_under_an_npz_name(tmp_path, capsys):
+    np.save(tmp_path / "table.npy", np.ones((50, 2)))
+    (tmp_path / "table.npy").rename(tmp_path / "table.npz")
+    refused(["identify", tmp_path / "table.npz", "--inputs", 0, "--outputs", 1, "--lag", 1], capsys,
+            "holds a single .npy array, not an .npz archive; name it table.npy", tmp_path)
+
+
+def test_an_npy_file_is_read(tmp_path, capsys, monkeypatch):
+    rng = np.random.default_rng(9)
+    system = random_system(1, 1, 1, rng)
+    u = rng.standard_normal(200)
+    np.save(tmp_path / "table.npy", np.column_stack([u, simulate(system, u)[:, 0]]))
+    monkeypatch.chdir(tmp_path)
+    status, out, err = run(["identify", "table.npy", "--inputs", 0, "--outputs", 1, "--lag", 1], capsys)
+    assert status == 0 and "identified from 140 samples" in out, err
+
+
+def test_nan_is_reported_in_the_files_terms_before_centring(data_csv, tmp_path, capsys):
+    lines = data_csv.read_text().splitlines()
+    fields = lines[100].split(",")  # line 101 of the file: the header, then data row 100
+    lines[100] = ",".join(fields[:2] + ["nan"])
+    data_csv.write_text("\n".join(lines) + "\n")
+    refused(["identify", data_csv, "--inputs", "u1,u2", "--outputs", "y", "--lag", 1], capsys,
+            f"column 'y' holds 1 missing value(s) (NaN or inf), the first in data row 100 (line 101 of {data_csv})",
+            tmp_path)
+
+
+def test_nan_in_an_npz_array(tmp_path, capsys):
+    y = np.ones(200)
+    y[99] = np.nan
+    refused(["identify", npz_data(tmp_path, y=y), "--lag", 1], capsys,
+            "column 'y[:, 0]' holds 1 missing value(s) (NaN or inf), the first in sample 99 (0-based) of array 'y'",
+            tmp_path)
+
+
+def test_a_constant_input_is_refused_with_its_name(data_csv, tmp_path, capsys):
+    table = np.loadtxt(data_csv, delimiter=",", skiprows=1)
+    table[:, 1] = 4.0
+    np.savetxt(data_csv, table, delimiter=",", header="u1,u2,y", comments="")
+    refused(["identify", data_csv, "--inputs", "u1,u2", "--outputs", "y", "--lag", 1], capsys,
+            "--inputs: column 'u2' is zero on the 210 samples used for identification (after centring: it is constant)",
+            tmp_path)
+
+
+def test_demo_seed_must_be_non_negative(capsys):
+    from ident.__main__ import main as program
+    assert program(["demo", "--seed", "-1"]) == 2
+    err = capsys.readouterr().err
+    assert "argument --seed: must be a non-negative integer, got -1" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_failed_identification_keeps_the_previous_results(data_csv, tmp_path, capsys):
+    model, plot = tmp_path / "m.json", tmp_path / "fit.png"
+    model.write_text("previous model"), plot.write_bytes(b"previous plot")
+    status, _, err = run(["identify", data_csv, "--inputs", 0, "--outputs", 2, "--lag", 500, "--model", model,
+                          "--plot", plot], capsys)
+    assert status == 1 and model.read_text() == "previous model" and plot.read_bytes() == b"previous plot"
+
+
+def test_a_write_failing_midway_writes_nothing(data_csv, tmp_path, capsys, monkeypatch):
+    model, plot = tmp_path / "m.json", tmp_path / "fit.png"
+    model.write_text("previous model")
+    real_replace = os.replace
+
+    def failing_replace(source, target):  # the plot moves into place, then the disk is full
+        if str(target) == str(model):
+            raise OSError(28, "No space left on device")
+        real_replace(source, target)
+
+    monkeypatch.setattr(cli.os, "replace", failing_replace)
+    status, _, err = run(["identify", data_csv, "--inputs", 0, "--outputs", 2, "--lag", 1, "--model", model,
+                          "--plot", plot], capsys)
+    assert status == 2 and "--model: cannot write" in err and "nothing was written" in err
+    assert model.read_text() == "previous model"
+    assert not [p for p in tmp_path.iterdir() if ".partial" in p.name]
+
+
+def test_lag_with_maxiter_0_says_nothing_converged(data_csv, tmp_path, capsys):
+    status, out, err = run(["lag", data_csv, "--inputs", "0:2", "--outputs", "y", "--lags", "1,2", "--modes", "eiv",
+                            "--maxiter", 0, "--plot", tmp_path / "lag.png"], capsys)
+    assert status == 0, err
+    assert "no lag converged within --maxiter 0 iterations" in out
+    assert "note (errors-in-variables): lag 1: maximum number of iterations reached" in out
+
+
+def test_daisy_that_identified_nothing_writes_nothing(tmp_path, capsys, monkeypatch):
+    from ident import daisy
+    failed = daisy.ModeResult("eiv", account="identification failed: lra: ValueError: x")
+    result = daisy.SetResult("erie", 1, 57, 5, 2, 1, 40, 17, None, {"eiv": failed})
+    monkeypatch.setattr(daisy, "run_benchmark", lambda *args, **kwargs: [result])
+    out_folder = tmp_path / "out"
+    out_folder.mkdir()
+    (out_folder / "table.md").write_text("previous table")
+    status, _, err = run(["daisy", "erie", "--out", out_folder, "--quiet"], capsys)
+    assert status == 1 and "every identification failed" in err and "nothing was written" in err
+    assert sorted(p.name for p in out_folder.iterdir()) == ["table.md"]
+    assert (out_folder / "table.md").read_text() == "previous table"
+
+
+def test_daisy_results_are_replaced_all_or_nothing(tmp_path, monkeypatch):
+    from ident import daisy
+    model = random_system(1, 1, 1, np.random.default_rng(1))
+    mode = daisy.ModeResult("eiv", "lra", 1.0, 3, 0.1, True, 90.0, [90.0], 90.0, 91.0, 0.5, 2.0, "", [], model)
+    results = [daisy.SetResult("erie", 1, 57, 5, 2, 1, 40, 17, None, {"eiv": mode})]
+    folder = tmp_path / "out"
+    daisy.write_results(results, folder)
+    before = {p.name: p.read_bytes() for p in folder.iterdir()}
+
+    def broken_figure(results, path=None):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(daisy, "figure1", broken_figure)
+    with pytest.raises(OSError):
+        daisy.write_results(results, folder)
+    assert {p.name: p.read_bytes() for p in folder.iterdir()} == before
+
+
+def test_identify_data_at_an_extreme_scale(data_csv, tmp_path, capsys):
+    table = np.loadtxt(data_csv, delimiter=",", skiprows=1)
+    np.savetxt(data_csv, 1e200 * table, delimiter=",", header="u1,u2,y", comments="")
+    model = tmp_path / "m.json"
+    status, out, err = run(["identify", data_csv, "--inputs", "u1,u2", "--outputs", "y", "--lag", 2,
+                            "--exact", "inputs", "--model", model, "--plot", tmp_path / "fit.png"], capsys)
+    assert status == 0, err
+    saved = json.loads(model.read_text())  # valid JSON: an overflowing misfit is null, not Infinity
+    assert saved["misfit"] is None and saved["fit"] > 95
+    assert "warning: ident: the misfit" in out and "beyond the floating-point range" in out

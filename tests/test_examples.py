@@ -1,12 +1,15 @@
-"""Run the example blocks of the literate documents, in reading order, one namespace per document.
+"""Run the examples and inline values of the literate documents, in reading order, one namespace per
+document, as the weave runs them (``weave.DocumentRun``).
 
-Each example is its own test item named after the document and the example; a failure names the
-example and its ``file:line`` in the literate source.
+Each example and each inline value is its own test item named after the document and the example
+(or the line of the value). A failure names its ``file:line`` in the literate source. One failure is
+one failure: a later example that reads a name the failed one was to define is skipped, naming the
+failure; the examples that do not depend on it still run. Selecting one item (``-k``) runs the
+document's earlier items first, as setup.
 """
 from __future__ import annotations
 
 import os
-import traceback
 
 import matplotlib
 import pytest
@@ -15,33 +18,39 @@ import tangle
 from conftest import PROJECT_ROOT
 
 matplotlib.use("Agg")
+weave = pytest.importorskip("weave")
 
 WEB = tangle.read_web(PROJECT_ROOT)
-EXAMPLES = [(doc.path, block) for doc in WEB.documents for block in doc.items
-            if isinstance(block, tangle.Block) and block.kind == "example"]
-NAMESPACES: dict[str, dict] = {}
-FAILED: dict[str, str] = {}
+UNITS = [(document, index, unit) for document in WEB.documents
+         for index, unit in enumerate(weave.run_order(document))]
+RUNS: dict[str, "weave.DocumentRun"] = {}
 
 
-def run_example(block: tangle.Block, namespace: dict) -> None:
-    """Execute an example so that tracebacks point at the literate file and line."""
-    source = "\n" * (block.body_location.line - 1) + "\n".join(block.lines) + "\n"
-    code = compile(source, str(PROJECT_ROOT / block.location.file), "exec")
-    exec(code, namespace)
+def unit_id(document: tangle.Document, unit) -> str:
+    name = unit.name if isinstance(unit, tangle.Block) else f"value at line {unit.location.line}"
+    return f"{os.path.basename(document.path)}::{name}"
 
 
-@pytest.mark.parametrize("document, block", EXAMPLES,
-                         ids=[f"{os.path.basename(d)}::{b.name}" for d, b in EXAMPLES])
-def test_example(document: str, block: tangle.Block) -> None:
-    if document in FAILED:
-        pytest.fail(f"an earlier example of {document} failed: {FAILED[document]}")
-    namespace = NAMESPACES.setdefault(document, {"__name__": f"example:{document}"})
-    try:
-        run_example(block, namespace)
-    except Exception:
-        FAILED[document] = f"'{block.name}' at {block.location}"
-        pytest.fail(f"example '{block.name}' at {block.location} failed:\n{traceback.format_exc()}")
+@pytest.fixture(scope="module", autouse=True)
+def environment():
+    """The examples run as the weave runs them: in the project root, with the package importable."""
+    with weave.example_environment(PROJECT_ROOT, figures=None):
+        yield
+    for run in RUNS.values():
+        run.runner.close_all()
+
+
+@pytest.mark.parametrize("document, index, unit", UNITS, ids=[unit_id(d, u) for d, _, u in UNITS])
+def test_example(document: tangle.Document, index: int, unit) -> None:
+    if document.path not in RUNS:
+        RUNS[document.path] = weave.DocumentRun(document, weave.ExampleRunner(PROJECT_ROOT, None))
+    outcome = RUNS[document.path].run_until(index)
+    title = f"{weave.unit_title(unit)} at {unit.location}"
+    if outcome.status == "skipped":
+        pytest.skip(f"{title} skipped: {outcome.message}")
+    if outcome.status == "failed":
+        pytest.fail(f"{title} failed:\n{outcome.message}", pytrace=False)
 
 
 def test_there_are_examples() -> None:
-    assert len(EXAMPLES) >= 3
+    assert sum(isinstance(unit, tangle.Block) for _, _, unit in UNITS) >= 3

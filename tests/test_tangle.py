@@ -220,3 +220,185 @@ def test_names_may_contain_arrows_and_symbols(tmp_path) -> None:
 def test_malformed_chunk_header_is_an_error_not_a_display(tmp_path) -> None:
     doc = chunk("<<src/ident/m.py>>=", "a = 1") + "```python .noeval\n# <<broken>\nb = 2\n```\n"
     assert error_of(tmp_path, {"a.md": doc}).startswith("literate/a.md:5: malformed chunk header")
+
+
+# --- hostile input: the tangler never deletes or writes outside src/ident/, writes all or nothing,
+# --- and names file:line (or the option) for every refusal ------------------------------------
+
+def generated_project(tmp_path: Path) -> Path:
+    """A project with two generated files on disk."""
+    root = make_project(tmp_path, {"a.md": chunk("<<src/ident/m.py>>=", "a = 1") + chunk("<<src/ident/n.py>>=", "b = 1")})
+    assert tangle.main(["--root", str(root)]) == 0
+    return root
+
+
+def raw_project(tmp_path: Path, data: bytes) -> Path:
+    """A project whose one document holds these bytes."""
+    (tmp_path / "literate").mkdir(parents=True)
+    (tmp_path / "literate/a.md").write_bytes(data)
+    return tmp_path
+
+
+def snapshot(root: Path) -> dict[str, bytes]:
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+def test_root_without_literate_folder_removes_nothing(tmp_path, capsys) -> None:
+    root = generated_project(tmp_path)
+    (root / "literate").rename(root / "elsewhere")
+    before = snapshot(root)
+    assert tangle.main(["--root", str(root)]) == 2
+    assert "has no literate/ folder" in capsys.readouterr().err
+    assert snapshot(root) == before
+    assert tangle.main(["--root", str(root), "--check"]) == 2
+
+
+@pytest.mark.parametrize("make", ["missing", "file"])
+def test_root_that_is_not_a_folder(tmp_path, capsys, make) -> None:
+    target = tmp_path / "nowhere"
+    if make == "file":
+        target.write_text("x")
+    assert tangle.main(["--root", str(target)]) == 2
+    assert f"--root {target}: no such folder" in capsys.readouterr().err
+
+
+def test_literate_folder_without_root_chunks_removes_nothing(tmp_path, capsys) -> None:
+    root = generated_project(tmp_path)
+    (root / "literate" / "a.md").write_text("Only text now.\n", encoding="utf-8")
+    before = snapshot(root)
+    assert tangle.main(["--root", str(root)]) == 2
+    assert "refusing to remove the 2 generated file(s)" in capsys.readouterr().err
+    assert snapshot(root) == before
+
+
+@pytest.mark.parametrize("name", ["src/ident/../../x.py", "src/ident/../ident/x.py", "src/ident/./x.py",
+                                  "src/ident//x.py", "src/ident/sub/..\\..\\x.py", "src/ident/data.txt",
+                                  "src/ident/.py", "src/ident/x y.py"])
+def test_root_names_outside_the_package_or_odd_are_refused(tmp_path, name) -> None:
+    doc = "Text.\n\n" + chunk(f"<<{name}>>=", "a = 1")
+    message = error_of(tmp_path, {"a.md": doc})
+    assert message.startswith(f"literate/a.md:3: root chunk <<{tangle.normalise_name(name)}>> must name a .py file")
+    assert tangle.main(["--root", str(tmp_path)]) == 2
+    assert not (tmp_path.parent / "x.py").exists() and not (tmp_path / "src").exists()
+
+
+def test_root_names_that_collide_on_a_case_insensitive_disk(tmp_path) -> None:
+    doc = chunk("<<src/ident/Model.py>>=", "a = 1") + chunk("<<src/ident/model.py>>=", "b = 1")
+    assert "names the same file as <<src/ident/Model.py>>" in error_of(tmp_path, {"a.md": doc})
+
+
+def test_root_that_needs_a_folder_where_another_root_is_a_file(tmp_path) -> None:
+    doc = chunk("<<src/ident/m.py>>=", "a = 1") + chunk("<<src/ident/m.py/x.py>>=", "b = 1")
+    assert "needs a folder where <<src/ident/m.py>>" in error_of(tmp_path, {"a.md": doc})
+
+
+def test_a_generated_file_linked_outside_the_package_is_not_written_through(tmp_path, capsys) -> None:
+    root = generated_project(tmp_path / "project")
+    outside = tmp_path / "precious.py"
+    outside.write_text("keep me\n")
+    (root / "src/ident/m.py").unlink()
+    (root / "src/ident/m.py").symlink_to(outside)
+    (root / "literate/a.md").write_text(chunk("<<src/ident/m.py>>=", "a = 2") + chunk("<<src/ident/n.py>>=", "b = 2"))
+    before = snapshot(root)
+    assert tangle.main(["--root", str(root)]) == 2
+    assert "literate/a.md:1: src/ident/m.py lies outside src/ident/" in capsys.readouterr().err
+    assert outside.read_text() == "keep me\n" and snapshot(root) == before
+
+
+def test_a_stale_generated_link_is_removed_but_not_its_target(tmp_path) -> None:
+    root = generated_project(tmp_path / "project")
+    outside = tmp_path / "target.py"
+    outside.write_text(tangle.GENERATED_MARK + "literate/gone.md.\nx = 1\n")
+    (root / "src/ident/old.py").symlink_to(outside)
+    assert tangle.main(["--root", str(root)]) == 0
+    assert not (root / "src/ident/old.py").is_symlink() and outside.is_file()
+
+
+def test_byte_order_mark_does_not_hide_chunks(tmp_path) -> None:
+    doc = chunk("<<src/ident/m.py>>=", "a = 1", "<<b>>") + chunk("<<b>>=", "b = 2")
+    plain = tangled(tmp_path / "plain", {"a.md": doc})
+    root = raw_project(tmp_path / "bom", b"\xef\xbb\xbf" + doc.encode())
+    assert tangle.tangle(root)[0] == plain
+
+
+def test_non_utf8_file_is_refused_with_its_line(tmp_path) -> None:
+    root = raw_project(tmp_path, b"Text.\n\nCaf\xe9 au lait\n" + chunk("<<src/ident/m.py>>=", "a = 1").encode())
+    with pytest.raises(tangle.TangleError, match=r"^literate/a.md:3: not valid UTF-8 \(byte 0xe9 at column 4"):
+        tangle.tangle(root)
+
+
+def test_non_utf8_file_on_the_command_line_has_no_traceback(tmp_path) -> None:
+    root = raw_project(tmp_path, b"\xff\xfe" + "text".encode("utf-16-le"))
+    result = subprocess.run([sys.executable, str(PROJECT_ROOT / "tangle.py"), "--root", str(root)],
+                            capture_output=True, text=True)
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    assert "literate/a.md:1: not valid UTF-8" in result.stderr
+
+
+def test_a_folder_named_like_a_document_is_refused_with_its_name(tmp_path) -> None:
+    root = make_project(tmp_path, {"a.md": chunk("<<src/ident/m.py>>=", "a = 1")})
+    (root / "literate/b.md").mkdir()
+    with pytest.raises(tangle.TangleError, match=r"^literate/b.md:1: cannot read the file"):
+        tangle.tangle(root)
+
+
+def test_1500_nested_chunks_tangle(tmp_path) -> None:
+    depth = 1500
+    doc = chunk("<<src/ident/m.py>>=", "def f():", "    <<level 0>>")
+    doc += "".join(chunk(f"<<level {k}>>=", f"x{k} = {k}", f"<<level {k + 1}>>") for k in range(depth))
+    doc += chunk(f"<<level {depth}>>=", "return 1")
+    lines = code_lines(tangled(tmp_path, {"a.md": doc})["src/ident/m.py"])
+    assert len(lines) == depth + 2 and lines[-1] == "    return 1" and lines[1000] == "    x999 = 999"
+
+
+def test_1500_nested_chunks_in_a_cycle_are_reported(tmp_path) -> None:
+    depth = 1500
+    doc = chunk("<<src/ident/m.py>>=", "<<level 0>>")
+    doc += "".join(chunk(f"<<level {k}>>=", f"<<level {(k + 1) % depth}>>") for k in range(depth))
+    message = error_of(tmp_path, {"a.md": doc})
+    assert "cycle of chunk references: <<level 0>> -> <<level 1>>" in message and message.startswith("literate/a.md:")
+
+
+def test_a_write_failing_midway_changes_nothing(tmp_path, capsys) -> None:
+    root = generated_project(tmp_path)
+    (root / "literate/a.md").write_text(chunk("<<src/ident/m.py>>=", "a = 2") + chunk("<<src/ident/n.py>>=", "b = 2")
+                                        + chunk("<<src/ident/sub/o.py>>=", "c = 2"))
+    before = snapshot(root)
+    real_replace = tangle.os.replace
+    calls = []
+
+    def failing_replace(source, target):
+        calls.append(target)
+        if len(calls) == 2:
+            raise OSError(28, "No space left on device", str(target))
+        real_replace(source, target)
+
+    tangle.os.replace = failing_replace
+    try:
+        assert tangle.main(["--root", str(root)]) == 2
+    finally:
+        tangle.os.replace = real_replace
+    err = capsys.readouterr().err
+    assert "cannot write src/ident/n.py (No space left on device); nothing was changed" in err
+    assert err.startswith("tangle.py: error: literate/a.md:")
+    assert snapshot(root) == before and not (root / "src/ident/sub").exists()
+
+
+def test_a_folder_where_a_generated_file_belongs(tmp_path, capsys) -> None:
+    root = generated_project(tmp_path)
+    (root / "src/ident/n.py").unlink()
+    (root / "src/ident/n.py").mkdir()
+    (root / "literate/a.md").write_text(chunk("<<src/ident/m.py>>=", "a = 2") + chunk("<<src/ident/n.py>>=", "b = 2"))
+    before = snapshot(root)
+    assert tangle.main(["--root", str(root), "--check"]) == 1
+    assert "src/ident/n.py: is not a file" in capsys.readouterr().out
+    assert tangle.main(["--root", str(root)]) == 2
+    assert "literate/a.md:5: src/ident/n.py is a folder" in capsys.readouterr().err
+    assert snapshot(root) == before
+
+
+def test_check_reads_a_damaged_generated_file_without_crashing(tmp_path, capsys) -> None:
+    root = generated_project(tmp_path)
+    (root / "src/ident/m.py").write_bytes(b"\xff\xfe\x00garbage")
+    assert tangle.main(["--root", str(root), "--check"]) == 1
+    assert "src/ident/m.py: differs" in capsys.readouterr().out

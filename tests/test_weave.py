@@ -65,6 +65,7 @@ def helper():
 import matplotlib.pyplot as plt
 
 print("hello <world> & all")
+# caption: A line through *three* points, $x^2$ aside.
 plt.figure(figsize=(2, 2))
 plt.plot([1, 2, 3])
 shared = 41
@@ -185,7 +186,7 @@ def test_pages_index_and_style_are_written(small) -> None:
     assert (out / "style.css").is_file() and ".highlight" in read(out, "style.css")
     assert read(out, "README.md") == "kept\n"  # not written by the weave: left alone
     assert not (out / "figures" / "stale.png").exists()  # an earlier weave's figure is removed
-    assert summary["pages"] == 2 and summary["examples"] == 4
+    assert summary["pages"] == 2 and summary["examples"] == 4 and summary["values"] == 0
 
 
 def test_chunks_are_named_and_cross_referenced(small) -> None:
@@ -226,7 +227,7 @@ def test_headings_get_ids_and_a_table_of_contents(small) -> None:
 def test_mathematics_becomes_mathml(small) -> None:
     _, out, _ = small
     first = read(out, "01-first.html")
-    assert first.count("<math ") == 4  # title, inline, display, table cell
+    assert first.count("<math ") == 5  # title, inline, display, table cell, a caption
     assert '<math xmlns="http://www.w3.org/1998/Math/MathML" display="block">' in first
     assert "$" not in re.sub(r"<pre.*?</pre>", "", first, flags=re.S)
     assert "<table>" in first
@@ -256,6 +257,24 @@ def test_examples_show_their_output_and_figures(small) -> None:
     assert "own-figure.png" in first.split('id="example-writes-its-own-figure"')[1].split('class="example"')[0]
 
 
+def test_figures_are_numbered_and_captioned(small) -> None:
+    _, out, _ = small
+    first = read(out, "01-first.html")
+    assert ('<figcaption><span class="figure-number">Figure 1.</span> A line through <em>three</em> points, '
+            '<math') in first
+    assert 'alt="A line through three points' in first
+    # figures without a caption line are numbered on and captioned with their example's name
+    assert '<span class="figure-number">Figure 3.</span> binds a figure and uses the namespace' in first
+    assert "Figure 1 of the example" not in first
+
+
+def test_the_index_opens_with_the_first_documents_abstract(small) -> None:
+    _, out, _ = small
+    index = read(out, "index.html")
+    assert "<h1>A small program with x^2</h1>" in index
+    assert index.index("Some text with inline math") < index.index('<nav class="toc"')
+
+
 def test_notebooks_carry_the_outputs(small) -> None:
     nbformat = pytest.importorskip("nbformat")
     _, out, _ = small
@@ -269,16 +288,138 @@ def test_notebooks_carry_the_outputs(small) -> None:
     assert notebook.metadata["kernelspec"]["name"] == "python3"
 
 
-def test_a_failing_example_stops_the_weave_with_its_location(tmp_path, capsys) -> None:
+def snapshot(folder: Path) -> dict[str, bytes]:
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+def test_a_failing_example_stops_the_weave_and_leaves_the_output_as_it_was(tmp_path, capsys) -> None:
+    out = tmp_path / "out"
+    root = make_project(tmp_path / "project")
+    assert weave.main(["--root", str(root), "--out", str(out)]) == 0
+    (out / "README.md").write_text("kept\n")
+    before = snapshot(out)
     broken = FIRST.replace('print(shared + 1)', 'print(shared + 1)\nraise ValueError("boom")')
-    root = make_project(tmp_path / "project", first=broken)
+    (root / "literate" / "01-first.md").write_text(broken, encoding="utf-8")
     line = broken.splitlines().index('raise ValueError("boom")') + 1
-    status = weave.main(["--root", str(root), "--out", str(tmp_path / "out")])
+    capsys.readouterr()
+    status = weave.main(["--root", str(root), "--out", str(out)])
     error = capsys.readouterr().err
     assert status == 1
     assert "literate/01-first.md:" in error and "example 'binds a figure and uses the namespace' failed" in error
     assert f'literate/01-first.md", line {line}' in error
-    assert "ValueError: boom" in error
+    assert "ValueError: boom" in error and "docs/ is left as it was" in error
+    assert snapshot(out) == before  # byte for byte, nothing added or removed
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out-weave-")]  # no build folder left
+
+
+DEPENDENT = '''\
+# Dependent examples
+
+```python
+# example: defines a and fails
+a = 1
+b = 2
+raise RuntimeError("after a and b, before c")
+c = 3
+```
+
+The value of a is `{python} a + 1`, of c `{python} c`.
+
+```python
+# example: uses a only
+print(a + b)
+```
+
+```python
+# example: uses c
+d = c + 1
+```
+
+```python
+# example: uses d, skipped in turn
+print(d)
+```
+
+```python
+# example: independent
+print("still runs")
+```
+'''
+
+
+def test_one_failure_is_one_failure_and_its_dependents_are_skipped(tmp_path) -> None:
+    root = make_project(tmp_path / "project", second=DEPENDENT)
+    document = next(d for d in tangle.read_web(root).documents if d.path.endswith("02-second.md"))
+    run = weave.DocumentRun(document, weave.ExampleRunner(root, None))
+    outcomes = run.run_all()
+    assert [o.status for o in outcomes] == ["failed", "ok", "skipped", "ok", "skipped", "skipped", "ok"]
+    assert outcomes[1].value == "2"  # what ran before the failing line stands
+    assert "reads c, which example 'defines a and fails' (literate/02-second.md:3) did not define" \
+        in outcomes[2].message
+    assert ("reads d, which example 'uses c' (literate/02-second.md:18), skipped because of example "
+            "'defines a and fails' (literate/02-second.md:3), did not define") in outcomes[5].message
+    assert outcomes[6].result.stdout == "still runs\n"
+    problems = run.problems()
+    assert len(problems) == 4 and problems[0].startswith("literate/02-second.md:3: example 'defines a and fails'")
+    assert "literate/02-second.md:11: inline value `{python} c` skipped" in problems[1]
+
+
+def test_inline_values_are_computed_in_reading_order(tmp_path) -> None:
+    text = FIRST.replace("## Examples", "## Examples\n\nBefore: `{python} 'shared' in globals()`; the "
+                         "width of the figure below: `{python} own.get_figwidth()`.") + (
+        "\nAfter: shared is `{python} shared`, twice `{python} f\"{2 * shared:.1f}\"`.\n")
+    root = make_project(tmp_path / "project", first=text)
+    out = tmp_path / "out"
+    assert weave.main(["--root", str(root), "--out", str(out)]) == 0
+    page = read(out, "01-first.html")
+    assert 'Before: <span class="computed" title="&#x27;shared&#x27; in globals()">False</span>;' in page
+    assert '<span class="computed" title="shared">41</span>' in page
+    assert '>82.0</span>' in page and "{python}" not in page
+    assert 'title="own.get_figwidth()">2.0</span>' in page  # run after the example that binds `own`
+    document = tangle.read_web(root).documents[0]
+    order = [getattr(u, "name", None) or u.expression for u in weave.run_order(document)]
+    assert order.index("own.get_figwidth()") == order.index("writes its own figure") + 1
+    notebook = read(out, "notebooks/01-first.ipynb")
+    assert "After: shared is 41, twice 82.0." in notebook
+
+
+def test_a_value_of_several_lines_is_markdown_of_its_own(tmp_path, capsys) -> None:
+    table = "\n\n`{python} '| a | b |\\n|---|---|\\n| 1 | $x^2$ |'`\n\nAfter the table.\n"
+    root = make_project(tmp_path / "project", first=FIRST + table)
+    out = tmp_path / "out"
+    assert weave.main(["--root", str(root), "--out", str(out)]) == 0
+    page = read(out, "01-first.html")
+    assert '<div class="computed" title="&#x27;| a | b |' in page and "<table>" in page.split("After the table")[0]
+    assert "<td>1</td>" in page and page.count("<math ") == 6  # the formula in the table is MathML too
+    inline = FIRST + "\nIn a sentence: `{python} 'two\\nlines'`.\n"
+    (root / "literate" / "01-first.md").write_text(inline, encoding="utf-8")
+    assert weave.main(["--root", str(root), "--out", str(out)]) == 1
+    assert "must stand alone on its line" in capsys.readouterr().err
+
+
+def test_a_failing_inline_value_is_reported_with_its_line(tmp_path, capsys) -> None:
+    root = make_project(tmp_path / "project", first=FIRST + "\nA value: `{python} undefined_name`.\n")
+    line = (FIRST + "\nA value: `{python} undefined_name`.\n").splitlines().index("A value: `{python} undefined_name`.") + 1
+    assert weave.main(["--root", str(root), "--out", str(tmp_path / "out")]) == 1
+    error = capsys.readouterr().err
+    assert f"literate/01-first.md:{line}: inline value `{{python}} undefined_name` failed" in error
+    assert "NameError" in error and not (tmp_path / "out").exists()
+
+
+def test_names_an_example_reads_and_binds() -> None:
+    bound, needed = weave.module_names("import numpy as np\nx = np.ones(3) + y\nfor k in range(3):\n"
+                                       "    z = k\ndef f(a):\n    return a + g\n")
+    assert bound == {"np", "x", "k", "z", "f"} and needed == {"y", "g"}
+    assert weave.module_names("x = x + 1") == ({"x"}, {"x"})
+    assert weave.module_names("f'{info.M:.3g}'", "eval") == (set(), {"info"})
+    assert weave.module_names("a = 1\nb = 2\nc = 3", after=2)[0] == {"b", "c"}
+
+
+def test_a_document_that_is_not_utf8_is_refused_with_its_line(tmp_path, capsys) -> None:
+    root = make_project(tmp_path / "project")
+    (root / "literate" / "02-second.md").write_bytes(SECOND.encode("utf-8") + b"\ncaf\xe9\n")
+    assert weave.main(["--root", str(root), "--out", str(tmp_path / "out")]) == 1
+    assert "literate/02-second.md:" in capsys.readouterr().err and not (tmp_path / "out").exists()
 
 
 def test_unknown_latex_is_reported_with_its_line(tmp_path, capsys) -> None:
@@ -327,8 +468,13 @@ def test_png_metadata_is_removed() -> None:
 
 
 def weave_real(out: Path) -> subprocess.CompletedProcess:
+    """Weave the real document; skip (not fail) when examples failed: tests/test_examples.py reports
+    each of them once, as its own failure."""
     done = subprocess.run([sys.executable, "weave.py", "--out", str(out)], cwd=PROJECT_ROOT,
                           capture_output=True, text=True, timeout=900)
+    if done.returncode != 0 and "did not run; docs/ is left as it was" in done.stderr:
+        pytest.skip("the weave stopped because examples failed (see tests/test_examples.py): "
+                    + done.stderr.splitlines()[1][:300])
     assert done.returncode == 0, f"the weave failed:\n{done.stdout}\n{done.stderr}"
     return done
 
