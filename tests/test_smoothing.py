@@ -207,6 +207,9 @@ def test_similarity_transforms_change_only_rounding() -> None:
             T_inv = np.linalg.inv(T)
             transformed = make_ss(T_inv @ model.A @ T, T_inv @ model.B, model.C @ T, model.D)
             assert misfit(w, transformed)[0] == pytest.approx(M, rel=1e-9)
+        if n:  # the states in units 1e300 apart: B = 1e300 B, C = 1e-300 C
+            extreme = make_ss(model.A, 1e300 * np.asarray(model.B), 1e-300 * np.asarray(model.C), model.D)
+            assert misfit(w, extreme)[0] == pytest.approx(M, rel=1e-9)
 
 
 @pytest.mark.parametrize("c", [2.0 ** -500, 1e-150, 1e-20, 3.7, 1e20, 1e150, 2.0 ** 500])
