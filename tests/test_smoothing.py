@@ -75,6 +75,14 @@ def random_model(rng, n, m, p, radius=0.9):
     return make_ss(A, rng.standard_normal((n, m)), rng.standard_normal((p, n)), rng.standard_normal((p, m)))
 
 
+def random_models(seed, count, orders=(0, 6), inputs=(0, 3), outputs=(1, 4), radius=0.9):
+    """(rng, model) for `count` random models with n, m, p drawn from the half-open ranges given."""
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        n, m, p = (int(rng.integers(*bounds)) for bounds in (orders, inputs, outputs))
+        yield rng, random_model(rng, n, m, p, radius)
+
+
 def trajectory_of(model, n_samples, rng):
     u = rng.standard_normal((n_samples, model.ninputs))
     return np.hstack([u, simulate(model, u, rng.standard_normal(model.nstates))])
@@ -94,7 +102,7 @@ def test_agrees_with_the_dense_reference_on_random_models(setting) -> None:
     """Orders 0-5 with p = 1-3 outputs (most not a multiple of p), m = 0-2, T = 5-40."""
     rng = np.random.default_rng(SETTINGS.index(setting))
     worst = 0.0
-    for _ in range(40):
+    for _ in range(30):
         n, m, p = int(rng.integers(0, 6)), int(rng.integers(0, 3)), int(rng.integers(1, 4))
         model = random_model(rng, n, m, p)
         lag = observability_index(model) if n else 0
@@ -122,10 +130,7 @@ def test_agrees_with_the_dense_reference_on_random_models(setting) -> None:
 
 
 def test_exact_trajectories_give_zero_misfit_and_come_back() -> None:
-    rng = np.random.default_rng(5)
-    for _ in range(40):
-        n, m, p = int(rng.integers(0, 7)), int(rng.integers(0, 3)), int(rng.integers(1, 4))
-        model = random_model(rng, n, m, p)
+    for rng, model in random_models(5, 40, orders=(0, 7)):
         w = trajectory_of(model, int(rng.integers(5, 300)), rng)
         M, wh, _ = misfit(w, model)
         assert M <= 1e-18 * np.sum(w ** 2)
@@ -133,10 +138,7 @@ def test_exact_trajectories_give_zero_misfit_and_come_back() -> None:
 
 
 def test_missing_values_of_an_exact_trajectory_are_filled_in() -> None:
-    rng = np.random.default_rng(19)
-    for _ in range(40):
-        n, m, p = int(rng.integers(0, 5)), int(rng.integers(0, 3)), int(rng.integers(1, 4))
-        model = random_model(rng, n, m, p)
+    for rng, model in random_models(19, 40, orders=(0, 5)):
         w = trajectory_of(model, int(rng.integers(10, 41)), rng)
         holes = w.copy()
         holes[rng.random(w.shape) < 0.3] = np.nan
@@ -147,10 +149,8 @@ def test_missing_values_of_an_exact_trajectory_are_filled_in() -> None:
 
 
 def test_exact_outputs_where_the_model_can_meet_them() -> None:
-    rng = np.random.default_rng(6)
-    for _ in range(30):
-        n, m, p = int(rng.integers(1, 5)), int(rng.integers(1, 3)), int(rng.integers(2, 4))
-        model = random_model(rng, n, m, p)
+    for rng, model in random_models(6, 30, orders=(1, 5), inputs=(1, 3), outputs=(2, 4)):
+        m = model.ninputs
         w0 = trajectory_of(model, int(rng.integers(10, 40)), rng)
         w = w0 + 0.3 * rng.standard_normal(w0.shape)
         w[:, m] = w0[:, m]  # the first output is exact and a value of a trajectory
@@ -196,11 +196,9 @@ def test_initial_state_reproduces_the_trajectory() -> None:
 
 
 def test_similarity_transforms_change_only_rounding() -> None:
-    rng = np.random.default_rng(10)
-    for _ in range(20):
-        n, m, p = int(rng.integers(1, 7)), int(rng.integers(0, 3)), int(rng.integers(1, 4))
-        model = random_model(rng, n, m, p)
-        w = trajectory_of(model, 150, rng) + 0.2 * rng.standard_normal((150, m + p))
+    for rng, model in random_models(10, 20, orders=(1, 7)):
+        n, q = model.nstates, model.ninputs + model.noutputs
+        w = trajectory_of(model, 150, rng) + 0.2 * rng.standard_normal((150, q))
         M = misfit(w, model)[0]
         for T in (np.linalg.qr(rng.standard_normal((n, n)))[0], np.diag(2.0 ** rng.integers(-40, 40, n)),
                   np.diag(10.0 ** rng.uniform(-6, 6, n))):
