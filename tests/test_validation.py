@@ -1,6 +1,7 @@
 """ident.validation: the fit, validation of exact and unstable models, P_ell conditioning, the lag curve."""
 from __future__ import annotations
 
+import math
 import warnings
 
 import matplotlib
@@ -8,9 +9,9 @@ import numpy as np
 import pytest
 
 from ident import misfit
-from ident.representations import make_ss, random_system, simulate
-from ident.validation import (LagCurve, fit_percent, misfit_vs_lag, p_ell_condition, plot_lag_curves,
-                              spectral_radius, validate)
+from ident.representations import make_ss, p_ell_condition, random_system, simulate
+from ident.validation import (LagCurve, fit_percent, misfit_vs_lag, plot_lag_curves, spectral_radius,
+                              split_for_validation, validate)
 
 matplotlib.use("Agg")
 
@@ -142,3 +143,19 @@ def test_the_errors_in_variables_misfit_of_validation_data() -> None:
         warnings.simplefilter("error")
         verdict = validate(unstable, u_noisy, y)
     assert verdict.fit.tolist() == [0.0, 0.0] and np.isfinite(verdict.misfit) and 0 <= verdict.eiv_fit <= 100
+
+
+def test_split_for_validation_is_the_papers_rule():
+    u = np.arange(10.0)[:, None]
+    y = 2 * np.arange(10.0)[:, None] + 5
+    split = split_for_validation(u, y)
+    assert len(split.identification) == math.ceil(0.7 * 10) == 7 and len(split.validation) == 3
+    assert np.allclose(np.vstack([split.identification, split.validation]).mean(axis=0), 0)
+    assert np.allclose(split.input_means, [4.5]) and np.allclose(split.output_means, [14.0])
+    for n_samples in (5, 57, 6305, 9600):  # the DAISY protocol: the first ceil(0.7 T) samples identify
+        w = np.ones((n_samples, 2))
+        assert len(split_for_validation(w[:, :1], w[:, 1:]).identification) == math.ceil(0.7 * n_samples)
+    raw = split_for_validation(u, y, 0.0, centre=False)
+    assert len(raw.validation) == 0 and np.array_equal(raw.identification[:, 1], y[:, 0])
+    with pytest.raises(ValueError, match="holdout must be a fraction in \\[0, 1\\), got 1"):
+        split_for_validation(u, y, 1)

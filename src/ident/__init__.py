@@ -9,8 +9,8 @@ generated from the literate documents in ``literate/`` by ``python tangle.py``.
 from ident.hankel import block_hankel, mosaic_hankel, time_major_permutation
 from ident.identification import IdentInfo, ident, misfit
 from ident.representations import kernel_to_ss, ss_to_kernel
-from ident.slra import InfeasibleKernelError, SLRAWarning, kernel_misfit
 from ident.smoothing import MisfitWarning
+from ident.solver import InfeasibleKernelError, SLRAWarning, kernel_misfit
 from ident.structure import Structure
 
 __all__ = [
