@@ -41,8 +41,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ident import Job, dask_executor, daisy, run_jobs
+from ident import Job, daisy, daisy_runner, dask_executor, run_jobs
 from ident.batch import ONE_THREAD
+from ident.validation import split_for_validation
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "daisy"
@@ -53,12 +54,13 @@ def daisy_jobs(directory) -> list[Job]:
     jobs = []
     for info in daisy.table1():
         u, y = daisy.load(info.name, directory, download_missing=False)
-        w_identification, _ = daisy.split_centred(u, y)
-        starts = {"lra": None, "arx": daisy.least_squares_kernel(w_identification, info.m, info.ell)}
+        w_identification = split_for_validation(u, y, daisy_runner.HOLDOUT).identification
+        starts = {"lra": None, "arx": daisy_runner.arx_kernel(w_identification, info.m, info.ell)}
         for mode, exact in (("oe", list(range(info.m))), ("eiv", None)):
             for start, kernel in starts.items():
-                jobs.append(Job(w_identification, info.m, info.ell,
-                                {"exct": exact, "sys0": kernel, **daisy.SETTINGS}, label=(info.name, mode, start)))
+                jobs.append(Job(w_identification, info.m, info.ell, {"exct": exact, "sys0": kernel,
+                                                                     **daisy_runner.SETTINGS},
+                                label=(info.name, mode, start)))
     return jobs
 
 

@@ -9,9 +9,8 @@ peak of the solver call and the process's peak resident memory. Each T runs in i
 that the peak memory is per T; the tracemalloc peak slows the solver itself down (by about 2.5x at
 T = 1e6), so the solver time is measured again with tracemalloc off.
 
-Usage: python benchmarks/bench_scaling.py [T ...] [--jacobian=projection|true] [--maxiter=N]
+Usage: python benchmarks/bench_scaling.py [T ...] [--maxiter=N]
 """
-import importlib
 import resource
 import subprocess
 import sys
@@ -21,10 +20,10 @@ import warnings
 
 import numpy as np
 
-from ident.slra import SLRAWarning, slra
+from ident.solver import SLRAWarning, slra
+from ident.solver.cost import Problem
+from ident.solver.optimiser import Chart
 from ident.structure import Structure
-
-solver = importlib.import_module("ident.slra")  # the module (the package exports the function slra)
 
 
 def data(n_samples, seed=0):
@@ -44,26 +43,24 @@ def data(n_samples, seed=0):
     return w + 0.1 * rng.standard_normal(w.shape)
 
 
-def one(n_samples, jacobian, maxiter):
+def one(n_samples, maxiter):
     """Measure one T and print its row."""
     structure = Structure.time_major(4, 2, [n_samples - 2])
     p = structure.params_from_series([data(n_samples)])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SLRAWarning)
         tracemalloc.start()
-        slra(p, structure, 10, maxiter=maxiter, jacobian=jacobian)
+        slra(p, structure, 10, maxiter=maxiter)
         peak = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
-        result = slra(p, structure, 10, maxiter=maxiter, jacobian=jacobian)
-    problem = solver._Problem(p, structure)
-    chart = solver._Chart.from_kernel(result.R)
+        result = slra(p, structure, 10, maxiter=maxiter)
+    problem = Problem(p, structure)
+    chart = Chart.from_kernel(result.R)
     started = time.perf_counter()
     state = problem.evaluate(result.R)
     seconds_cost = time.perf_counter() - started
-    normal_equations = (problem.normal_equations_true if jacobian == "true"
-                        else problem.normal_equations_projection)
     started = time.perf_counter()
-    normal_equations(state, chart.free_columns)
+    problem.normal_equations(state, chart.free_columns)
     seconds_jacobian = time.perf_counter() - started
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024 ** 2  # GB (ru_maxrss is in kB)
     print(f"{n_samples:>9d} {result.iterations:5d} {result.nfev:5d} {result.time:9.2f} "
@@ -73,19 +70,17 @@ def one(n_samples, jacobian, maxiter):
 
 def main(argv):
     options = dict(a.lstrip("-").partition("=")[::2] for a in argv if a.startswith("--"))
-    jacobian = options.get("jacobian", "projection")
     maxiter = int(options.get("maxiter", 100))
     sizes = [int(float(a)) for a in argv if not a.startswith("--")]
     if len(sizes) == 1:
-        one(sizes[0], jacobian, maxiter)
+        one(sizes[0], maxiter)
         return
     sizes = sizes or [1000, 10_000, 100_000, 1_000_000]
-    print(f"jacobian={jacobian}, maxiter={maxiter}")
+    print(f"maxiter={maxiter}")
     print(f"{'T':>9s} {'iter':>5s} {'nfev':>5s} {'solver s':>9s} {'s/iter':>9s} {'s/jac':>9s} "
           f"{'s/cost':>9s} {'peak GB':>9s} {'RSS GB':>8s}  M/(Tq)  conv", flush=True)
     for n_samples in sizes:
-        subprocess.run([sys.executable, __file__, str(n_samples), f"--jacobian={jacobian}",
-                        f"--maxiter={maxiter}"], check=True)
+        subprocess.run([sys.executable, __file__, str(n_samples), f"--maxiter={maxiter}"], check=True)
 
 
 if __name__ == "__main__":

@@ -23,7 +23,7 @@ import numpy as np
 
 from daisy_solver import DAISY, SETS
 from ident import daisy as daisy_sets
-from ident.slra import slra
+from ident.solver import slra
 from ident.structure import Structure
 
 

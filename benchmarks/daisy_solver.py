@@ -1,4 +1,4 @@
-"""DAISY Table 1 protocol for the solver: misfit, iterations and time of ident.slra versus the reference.
+"""DAISY Table 1 protocol for the solver: misfit, iterations and time of ident.solver.slra versus the reference.
 
 For each set: w = [u y] (inputs first), every column centred over the whole set, the first
 ceil(0.7 T) samples, q = m + p, the lag ell of datasets.toml, Hankel depth ell + 1 (time-major
@@ -8,7 +8,7 @@ last digit the reference prints (ballbeam: 2.43137e-3 is printed to 6 digits; th
 2.4313737e-3).
 The data are read from ../shared/daisy beside the project. Not a test: it prints a table.
 
-Usage: python benchmarks/daisy_solver.py [MAXITER] [--jacobian=projection|true] [--secant|--no-secant] [SET ...]
+Usage: python benchmarks/daisy_solver.py [MAXITER] [--secant|--no-secant] [SET ...]
 """
 import math
 import sys
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ident.slra import SLRAWarning, slra
+from ident.solver import SLRAWarning, slra
 from ident.structure import Structure
 
 DAISY = Path(__file__).resolve().parents[2] / "shared" / "daisy"
@@ -56,7 +56,7 @@ def load(name):
     return w[: math.ceil(0.7 * len(w))], meta.m, meta.p, meta.ell
 
 
-def run(name, maxiter=100, jacobian="projection", secant=None):
+def run(name, maxiter=100, secant=None):
     """Solve one set; returns the SLRAResult."""
     w, m, p, ell = load(name)
     n_samples, n_vars = w.shape
@@ -65,7 +65,7 @@ def run(name, maxiter=100, jacobian="projection", secant=None):
         warnings.simplefilter("ignore", SLRAWarning)
         options = {} if secant is None else {"secant": secant}  # None: the solver's default
         return slra(structure.params_from_series([w]), structure, (ell + 1) * n_vars - p,
-                    maxiter=maxiter, jacobian=jacobian, **options)
+                    maxiter=maxiter, **options)
 
 
 def main(argv):
@@ -73,15 +73,14 @@ def main(argv):
         sys.exit(f"DAISY data not found in {DAISY}")
     maxiter = next((int(a) for a in argv if a.isdigit()), 100)
     options = dict(a.lstrip("-").partition("=")[::2] for a in argv if a.startswith("--"))
-    jacobian = options.get("jacobian", "projection")
     secant = False if "no-secant" in options else True if "secant" in options else None
     names = [a for a in argv if not a.isdigit() and not a.startswith("--")] or SETS
-    print(f"maxiter {maxiter}, jacobian={jacobian}, secant={secant}")
+    print(f"maxiter {maxiter}, secant={secant}")
     print(f"{'set':17s} {'M (ident)':>14s} {'M (reference)':>14s} {'rel.diff':>9s} "
           f"{'iter':>5s} {'ref it':>6s} {'s':>7s} {'ref s':>7s}  conv  message")
     total, total_reference, all_met = 0.0, 0.0, True
     for name in names:
-        result = run(name, maxiter, jacobian, secant)
+        result = run(name, maxiter, secant)
         reference_misfit, reference_iterations, reference_seconds = REFERENCE[name]
         total += result.time
         total_reference += reference_seconds or 0.0

@@ -1,6 +1,7 @@
 """Reproduce the paper's Section 4: ident on the 17 DAISY data sets of Table 1, both modes.
 
-Writes docs/daisy/table.md, table.csv, results.json and figure1.png (the table in
+Writes docs/daisy/table.md, table.csv, results.json and figure1.png, and the run log run-log.json
+(date, versions, seconds; not committed) beside them (the table in
 literate/04-daisy.md is pasted from table.md). A thin wrapper of ``python -m ident daisy``: the
 output folder defaults to docs/daisy, and the data to the shared folder beside the project when
 IDENT_DAISY_DIR is not set. Any option of ``python -m ident daisy`` may be given.

@@ -12,7 +12,7 @@ import pytest
 
 from ident import ident, misfit
 from ident.representations import random_system
-from ident.slra import kernel_misfit, slra
+from ident.solver import kernel_misfit, slra
 from ident.structure import Structure
 
 RNG = np.random.default_rng(0)
@@ -176,8 +176,8 @@ CASES = [
      ValueError, 'exct marks 2 variables exact, but a model with m = 1 inputs.*at most 1 can be exact'),
     ('exct autonomous', lambda: ident(W, 0, 1, exct=[2]),
      ValueError, 'exct marks 1 variables exact, but a model with m = 0 inputs'),
-    ('misfit exct more than m', lambda: misfit(W, SYS, exct=[1, 2]),
-     ValueError, 'exct marks 2 variables exact, but a model with m = 1 inputs'),
+    ('misfit exact outputs the model cannot meet', lambda: misfit(W, SYS, exct=[1, 2]),
+     ValueError, 'exct: no trajectory of sysh meets the exact values of series 0'),
     # sys0 and sysh: real, finite, of full row rank, feasible; named as the caller's argument
     ('sys0 rank deficient', lambda: ident(W, 1, 1, sys0=np.ones((2, 6))),
      ValueError, 'sys0 gives a kernel R of rank 1, but a model with p = 2 outputs needs 2 independent rows'),
@@ -366,7 +366,7 @@ def test_exact_outputs_are_allowed() -> None:
 
 def test_infeasible_starts_are_reported_in_the_callers_terms(monkeypatch) -> None:
     import ident.identification as identification
-    from ident.slra import InfeasibleKernelError
+    from ident.solver import InfeasibleKernelError
 
     def infeasible(*args, **kwargs):
         raise InfeasibleKernelError("no feasible initial kernel; unstructured LRA: dpbtrf info=4")
@@ -381,7 +381,7 @@ def test_infeasible_starts_are_reported_in_the_callers_terms(monkeypatch) -> Non
 # --- warnings point at the caller's line ----------------------------------------------------------
 
 def test_non_convergence_warning_points_at_the_callers_line() -> None:
-    from ident.slra import SLRAWarning
+    from ident.solver import SLRAWarning
     with pytest.warns(SLRAWarning, match=r"ident: .*info.converged is False") as record:
         _, info, _, _ = ident(W_NOISY, 1, 2, maxiter=1)
     assert not info.converged and len(record) == 1

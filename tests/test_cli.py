@@ -329,10 +329,10 @@ def test_lag_with_maxiter_0_says_nothing_converged(data_csv, tmp_path, capsys):
 
 
 def test_daisy_that_identified_nothing_writes_nothing(tmp_path, capsys, monkeypatch):
-    from ident import daisy
-    failed = daisy.ModeResult("eiv", account="identification failed: lra: ValueError: x")
-    result = daisy.SetResult("erie", 1, 57, 5, 2, 1, 40, 17, None, {"eiv": failed})
-    monkeypatch.setattr(daisy, "run_benchmark", lambda *args, **kwargs: [result])
+    from ident import daisy_runner
+    failed = daisy_runner.ModeResult("eiv", account="identification failed: lra: ValueError: x")
+    result = daisy_runner.SetResult("erie", 1, 57, 5, 2, 1, 40, 17, None, {"eiv": failed})
+    monkeypatch.setattr(daisy_runner, "run_benchmark", lambda *args, **kwargs: [result])
     out_folder = tmp_path / "out"
     out_folder.mkdir()
     (out_folder / "table.md").write_text("previous table")
@@ -343,20 +343,21 @@ def test_daisy_that_identified_nothing_writes_nothing(tmp_path, capsys, monkeypa
 
 
 def test_daisy_results_are_replaced_all_or_nothing(tmp_path, monkeypatch):
-    from ident import daisy
+    from ident import daisy_report, daisy_runner
     model = random_system(1, 1, 1, np.random.default_rng(1))
-    mode = daisy.ModeResult("eiv", "lra", 1.0, 3, 0.1, True, 90.0, [90.0], 90.0, 91.0, 0.5, 2.0, "", [], model)
-    results = [daisy.SetResult("erie", 1, 57, 5, 2, 1, 40, 17, None, {"eiv": mode})]
+    mode = daisy_runner.ModeResult("eiv", "lra", 1.0, 3, 0.1, True, 90.0, [90.0], 90.0, 91.0, 0.5, 2.0, "", [],
+                                   model)
+    results = [daisy_runner.SetResult("erie", 1, 57, 5, 2, 1, 40, 17, None, {"eiv": mode})]
     folder = tmp_path / "out"
-    daisy.write_results(results, folder)
+    daisy_report.write_results(results, folder)
     before = {p.name: p.read_bytes() for p in folder.iterdir()}
 
     def broken_figure(results, path=None):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(daisy, "figure1", broken_figure)
+    monkeypatch.setattr(daisy_report, "figure1", broken_figure)
     with pytest.raises(OSError):
-        daisy.write_results(results, folder)
+        daisy_report.write_results(results, folder)
     assert {p.name: p.read_bytes() for p in folder.iterdir()} == before
 
 

@@ -10,7 +10,7 @@ import gzip
 import http.server
 import io
 import json
-import math
+import re
 import shutil
 import socket
 import sys
@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ident import daisy
+from ident import daisy, daisy_report, daisy_runner
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "daisy"
 XDG_ONLY = pytest.mark.skipif(sys.platform in ("win32", "darwin"), reason="the XDG cache convention is for Linux/Unix")
@@ -249,27 +249,9 @@ def test_an_uncompressed_mirror_works_too(shared, no_environment, tmp_path):
 
 # --- the runner ----------------------------------------------------------------------------------------
 
-def test_split_centred():
-    u = np.arange(10.0)[:, None]
-    y = 2 * np.arange(10.0)[:, None] + 5
-    w_identification, w_validation = daisy.split_centred(u, y)
-    assert len(w_identification) == math.ceil(0.7 * 10) == 7 and len(w_validation) == 3
-    assert np.allclose(np.vstack([w_identification, w_validation]).mean(axis=0), 0)
-
-
-def test_least_squares_kernel_recovers_an_exact_arx_system():
-    rng = np.random.default_rng(0)
-    u = rng.standard_normal(100)
-    y = np.zeros(100)
-    for t in range(98):
-        y[t + 2] = 1.2 * y[t + 1] - 0.5 * y[t] + 0.7 * u[t + 1] + 0.2 * u[t]
-    R = daisy.least_squares_kernel(np.column_stack([u, y]), 1, 2)
-    assert np.allclose(R, [[0.2, -0.5, 0.7, 1.2, 0.0, -1.0]], atol=1e-10)
-
-
 def test_runner_on_two_small_sets(shared, tmp_path):
     progress = io.StringIO()
-    results = daisy.run_benchmark(["erie", "robot_arm"], directory=shared, download_missing=False,
+    results = daisy_runner.run_benchmark(["erie", "robot_arm"], directory=shared, download_missing=False,
                                   progress=progress)
     assert [r.name for r in results] == ["erie", "robot_arm"]
     assert "2/2 robot_arm" in progress.getvalue()
@@ -278,10 +260,10 @@ def test_runner_on_two_small_sets(shared, tmp_path):
     for mode in ("oe", "eiv"):
         assert robot_arm.modes[mode].fit > 90, mode
         assert {c.start for c in robot_arm.modes[mode].candidates} >= {"lra", "arx"}
-    assert erie.modes["eiv"].misfit <= daisy.REFERENCE_MISFIT["erie"] * (1 + 1e-6)
-    paths = daisy.write_results(results, tmp_path / "out")
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["figure1.png", "results.json", "table.csv",
-                                                                    "table.md"]
+    assert erie.modes["eiv"].misfit <= daisy_runner.REFERENCE_MISFIT["erie"] * (1 + 1e-6)
+    paths = daisy_report.write_results(results, tmp_path / "out")
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["figure1.png", "results.json", "run-log.json",
+                                                                    "table.csv", "table.md"]
     table = paths["markdown"].read_text()
     assert "| 8 | robot_arm | 1024 | 1 | 1 | 4 |" in table and "original software" in table
     document = json.loads(paths["json"].read_text())
@@ -290,12 +272,31 @@ def test_runner_on_two_small_sets(shared, tmp_path):
     assert [row["set"] for row in rows] == ["erie", "robot_arm"] and float(rows[1]["eiv_fit"]) > 90
 
 
+def test_committed_results_hold_no_date_version_or_time_and_repeat_byte_for_byte(shared, tmp_path):
+    # the four files of a run go into docs/ and are committed: the same data and code must give the same
+    # bytes; the date, the versions and the seconds go to the run log only
+    results = daisy_runner.run_benchmark(["robot_arm"], directory=shared, download_missing=False, progress=None)
+    first = daisy_report.write_results(results, tmp_path / "a")
+    again = daisy_runner.run_benchmark(["robot_arm"], directory=shared, download_missing=False, progress=None)
+    second = daisy_report.write_results(again, tmp_path / "b")
+    for key in ("markdown", "csv", "json"):
+        text = first[key].read_text()
+        assert text == second[key].read_text(), key
+        assert "seconds" not in text and "Generated" not in text and "numpy" not in text, key
+        assert not re.search(r"20\d\d-\d\d-\d\d", text), key
+    assert first["figure"].read_bytes() == second["figure"].read_bytes()
+    log = json.loads(first["log"].read_text())
+    assert log["seconds"]["robot_arm"]["eiv"]["all starts"] > 0 and log["versions"]["numpy"]
+    ignored = (Path(__file__).resolve().parents[1] / ".gitignore").read_text().split()
+    assert daisy_report.RUN_LOG in ignored
+
+
 def test_runner_rejects_bad_choices(shared):
     with pytest.raises(ValueError, match="not a data set of Table 1"):
-        daisy.run_benchmark(["distill2"], directory=shared, progress=None)
+        daisy_runner.run_benchmark(["distill2"], directory=shared, progress=None)
     with pytest.raises(ValueError, match="at least one data set"):
-        daisy.run_benchmark([], directory=shared, progress=None)
+        daisy_runner.run_benchmark([], directory=shared, progress=None)
     with pytest.raises(ValueError, match="modes must be a non-empty selection of oe, eiv"):
-        daisy.run_set("erie", directory=shared, modes=["ml"])
+        daisy_runner.run_set("erie", directory=shared, modes=["ml"])
     with pytest.raises(ValueError, match="starts must"):
-        daisy.run_set("erie", directory=shared, starts=[])
+        daisy_runner.run_set("erie", directory=shared, starts=[])

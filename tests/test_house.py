@@ -1,0 +1,101 @@
+"""The shape of the package (the house): imports go one way, and functions and modules stay readable.
+
+- No module of ``ident`` imports, directly or through others, a module that imports it back. Every
+  ``import`` counts, also one inside a function: a cycle hidden in a function is still a cycle.
+  ``from ident.solver import gauss_newton`` is an import of the submodule, ``from ident.solver import
+  slra`` one of the package.
+- A function (or method) has at most 80 lines, its docstring not counted (the docstrings are the
+  paper's inline help, with a line per parameter); a module has at most 800 lines.
+"""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "src" / "ident"
+MAX_FUNCTION_LINES = 80
+MAX_MODULE_LINES = 800
+
+
+def module_name(path: Path) -> str:
+    parts = ["ident", *path.relative_to(PACKAGE).with_suffix("").parts]
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {module_name(path): path for path in sorted(PACKAGE.rglob("*.py"))}
+
+
+def imports_of(name: str) -> set[str]:
+    """The modules of ident that module `name` imports, anywhere in its code."""
+    path = MODULES[name]
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:  # a relative import
+                base = ".".join(package.split(".")[: len(package.split(".")) - node.level + 1] + ([base] if base else []))
+            for alias in node.names:
+                submodule = f"{base}.{alias.name}"
+                found.add(submodule if submodule in MODULES else base)
+    return {module for module in found if module in MODULES and module != name}
+
+
+GRAPH = {name: imports_of(name) for name in MODULES}
+
+
+def cycle_through(start: str) -> list[str] | None:
+    """A chain of imports from `start` back to itself, or None."""
+    stack, seen = [(start, [start])], set()
+    while stack:
+        name, chain = stack.pop()
+        for imported in sorted(GRAPH[name]):
+            if imported == start:
+                return chain + [start]
+            if imported not in seen:
+                seen.add(imported)
+                stack.append((imported, chain + [imported]))
+    return None
+
+
+def test_the_import_graph_has_no_cycle() -> None:
+    cycles = [" -> ".join(chain) for name in MODULES if (chain := cycle_through(name))]
+    assert not cycles, cycles
+
+
+def test_the_solver_imports_nothing_of_the_system_theory() -> None:
+    solver = {name for name in MODULES if name == "ident.solver" or name.startswith("ident.solver.")}
+    reached, stack = set(), list(solver)
+    while stack:
+        for imported in GRAPH[stack.pop()]:
+            if imported not in reached:
+                reached.add(imported)
+                stack.append(imported)
+    assert reached - solver <= {"ident.structure", "ident.hankel", "ident.starts"}, reached - solver
+
+
+def function_lengths(path: Path) -> list[tuple[int, str]]:
+    """(lines without the docstring, name:line) of every function and method of a module."""
+    lengths = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            lines = node.end_lineno - node.lineno + 1
+            body = node.body
+            if body and isinstance(body[0], ast.Expr) and isinstance(getattr(body[0], "value", None), ast.Constant) \
+                    and isinstance(body[0].value.value, str):
+                lines -= body[0].end_lineno - body[0].lineno + 1
+            lengths.append((lines, f"{node.name}:{node.lineno}"))
+    return lengths
+
+
+@pytest.mark.parametrize("name", sorted(MODULES))
+def test_functions_and_modules_stay_short(name: str) -> None:
+    path = MODULES[name]
+    n_lines = len(path.read_text(encoding="utf-8").splitlines())
+    assert n_lines <= MAX_MODULE_LINES, f"{path.name} has {n_lines} lines"
+    long = [(lines, where) for lines, where in function_lengths(path) if lines > MAX_FUNCTION_LINES]
+    assert not long, f"{path.name}: functions over {MAX_FUNCTION_LINES} lines: {long}"
