@@ -293,11 +293,12 @@ def test_a_sequence_of_starts_and_a_failing_candidate() -> None:
     assert np.isnan(info.candidates[0].misfit) and info.candidates[0].Rh is None
 
 
-def test_the_candidates_through_an_executor_are_those_run_here() -> None:
-    from concurrent.futures import ThreadPoolExecutor
+@pytest.mark.parametrize("kind", ["threads", "processes"])
+def test_the_candidates_through_an_executor_are_those_run_here(kind) -> None:
+    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
     w = two_short_trajectories()
     _, serial, _, _ = ident(w, 1, 3, wini=0)
-    with ThreadPoolExecutor(max_workers=2) as executor:
+    with (ThreadPoolExecutor if kind == "threads" else ProcessPoolExecutor)(max_workers=2) as executor:
         _, pooled, _, _ = ident(w, 1, 3, wini=0, executor=executor)
     assert pooled.start == serial.start
     assert [c.misfit for c in pooled.candidates] == pytest.approx([c.misfit for c in serial.candidates], rel=1e-12)

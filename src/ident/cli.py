@@ -233,7 +233,7 @@ def command_identify(args) -> int:
     fits = ", ".join(f"{name} {fit:.1f} %" for name, fit in zip(output_names, result.fit))
     print(f"identified from {n_identification} samples of {args.data}: m = {m} inputs, p = {n_outputs} outputs, "
           f"lag {args.lag}, order {sysh.nstates}" + (f", exact: {', '.join(map(str, exact))}" if exact else ""))
-    print(f"misfit M = {info.M:.6g} ({info.iter} iterations, {info.time:.2f} s; {info.message})")
+    print(f"misfit M = {info.M:.6g} ({info.iter} iterations; {info.message})")
     if len(info.candidates) > 1:
         print(f"start kept: {info.start} (least misfit among the stable models of the starts: " + "; ".join(
             f"{c.start} {c.error or f'M = {c.misfit:.6g}, spectral radius {c.spectral_radius:.4g}'}"
