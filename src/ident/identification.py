@@ -10,10 +10,9 @@ import sys
 import warnings
 from collections.abc import Sequence
 
-import control
 import numpy as np
 
-from ident.representations import (inistate, kernel_to_ss, markov_parameters, normalize_kernel,
+from ident.representations import (inistate, is_state_space, kernel_to_ss, markov_parameters, normalize_kernel,
                                    observability_index, observability_matrix, observer_form_kernel,
                                    ss_to_kernel)
 from ident.solver import InfeasibleKernelError, SLRAWarning, kernel_misfit, slra
@@ -278,7 +277,7 @@ def initial_kernel_from(sys0, m: int, ell: int, n_vars: int) -> np.ndarray | Non
     if sys0 is None:
         return None
     n_outputs = n_vars - m
-    if isinstance(sys0, control.StateSpace):
+    if is_state_space(sys0):
         if not sys0.isdtime(strict=True):
             raise ValueError("sys0 must be a discrete-time model (dt set), got a continuous-time one")
         if (sys0.ninputs, sys0.noutputs, sys0.nstates) != (m, n_outputs, ell * n_outputs):
@@ -568,7 +567,7 @@ def misfit(w, sysh, *, exct=None, wini=None):
 
 
 def check_model(sysh, n_vars: int) -> None:
-    if not isinstance(sysh, control.StateSpace):
+    if not is_state_space(sysh):
         raise TypeError(f"sysh must be a control.StateSpace, got {type(sysh).__name__}")
     if not sysh.isdtime(strict=True):
         raise ValueError("sysh must be a discrete-time model (dt set), got a continuous-time one")
