@@ -7,13 +7,16 @@ After I. Markovsky, "System identification by structured low-rank approximation"
 generated from the literate documents in ``literate/`` by ``python tangle.py``.
 """
 from ident.hankel import block_hankel, mosaic_hankel, time_major_permutation
-from ident.identification import IdentInfo, ident, misfit
+from ident.identification import IdentInfo, Reduction, ident, misfit
+from ident.reduction import balanced_truncation
 from ident.representations import kernel_to_ss, ss_to_kernel
 from ident.solver import InfeasibleKernelError, SLRAWarning, kernel_misfit
 from ident.structure import Structure
+from ident.validation import compare, fit_percent, misfit_vs_lag, resid, validate
 
 __all__ = [
-    "ident", "misfit", "IdentInfo", "kernel_misfit", "Structure", "SLRAWarning",
+    "ident", "misfit", "IdentInfo", "Reduction", "compare", "resid", "validate", "fit_percent",
+    "misfit_vs_lag", "balanced_truncation", "kernel_misfit", "Structure", "SLRAWarning",
     "InfeasibleKernelError", "kernel_to_ss", "ss_to_kernel", "block_hankel", "mosaic_hankel",
     "time_major_permutation",
 ]
