@@ -8,6 +8,7 @@ generated from the literate documents in ``literate/`` by ``python tangle.py``.
 """
 from ident.hankel import block_hankel, mosaic_hankel, time_major_permutation
 from ident.identification import IdentInfo, Reduction, ident, misfit
+from ident.model_file import load_model
 from ident.reduction import balanced_truncation
 from ident.representations import kernel_to_ss, ss_to_kernel
 from ident.solver import InfeasibleKernelError, SLRAWarning, kernel_misfit
@@ -16,7 +17,7 @@ from ident.validation import compare, fit_percent, misfit_vs_lag, resid, validat
 
 __all__ = [
     "ident", "misfit", "IdentInfo", "Reduction", "compare", "resid", "validate", "fit_percent",
-    "misfit_vs_lag", "balanced_truncation", "kernel_misfit", "Structure", "SLRAWarning",
+    "misfit_vs_lag", "load_model", "balanced_truncation", "kernel_misfit", "Structure", "SLRAWarning",
     "InfeasibleKernelError", "kernel_to_ss", "ss_to_kernel", "block_hankel", "mosaic_hankel",
     "time_major_permutation",
 ]
