@@ -21,6 +21,7 @@ def modules_loaded_by(code: str) -> list[str]:
 
 @pytest.mark.parametrize("code", [
     "import ident",
+    "from ident import ident, misfit, compare, resid, validate, fit_percent, misfit_vs_lag, load_model",
     "import ident.cli, ident.__main__, ident.validation, ident.daisy_runner, ident.daisy_report",
     "import contextlib, io\nfrom ident.__main__ import main\n"
     "with contextlib.redirect_stdout(io.StringIO()): main(['--help']); main(['identify', '--help'])",
