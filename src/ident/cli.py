@@ -240,7 +240,7 @@ def command_identify(args) -> int:
     fits = ", ".join(f"{name} {fit:.1f} %" for name, fit in zip(output_names, result.fit))
     print(f"identified from {n_identification} samples of {args.data}: m = {m} inputs, p = {n_outputs} outputs, "
           f"lag {args.lag}, order {sysh.nstates}" + (f", exact: {', '.join(map(str, exact))}" if exact else ""))
-    print(f"misfit M = {info.M:.6g} ({info.iter} iterations, {info.time:.2f} s; {info.message})")
+    print(f"misfit M = {info.M:.6g} ({info.iter} iterations; {info.message})")
     print(f"validation fit on {where}: {result.mean_fit:.1f} % ({fits})"
           + (f" [{result.reason}]" if result.reason else ""))
     for warning in dict.fromkeys(str(w.message) for w in caught):
