@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import subprocess
 import sys
@@ -70,7 +71,8 @@ def measure(rounds: int) -> dict:
         "ratio_import_ident": best_import["ident"] / floor,
         "ratio_import_ident_with_control": best_import["ident + python-control"] / floor,
         "ratio_wall_help": best_wall["python -m ident --help"] / best_wall["python -c 'import numpy, scipy.linalg'"],
-        "note": "best of the rounds, candidates alternating; the machine may have been shared",
+        "load_average": [round(x, 2) for x in os.getloadavg()],
+        "note": "best of the rounds, candidates alternating; the machine may have been shared (load_average)",
     }
 
 

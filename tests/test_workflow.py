@@ -354,3 +354,22 @@ def test_load_model_reads_a_model_without_inputs(tmp_path) -> None:
     saved = load_model(path)
     assert saved.model.ninputs == 0 and saved.model.nstates == 2
     assert np.allclose(saved.simulate(np.zeros((5, 0)), np.zeros(2)), 1.0)
+
+
+def test_the_third_order_two_by_two_plant_of_the_issue() -> None:
+    """Order 3 with p = 2: ident(w, 2, 2) can only give order 4; n=3 gives the plant's order, and on
+    held-out data it simulates as well as the plant (benchmarks/reduction_study.py runs 100 such cases)."""
+    rng = np.random.default_rng(21)
+    three_outputs = random_system(2, 3, 1, rng)
+    plant = make_ss(three_outputs.A, three_outputs.B, three_outputs.C[:2], three_outputs.D[:2])
+    u = rng.standard_normal((1000, 2))
+    w = np.hstack([u, simulate(plant, u, rng.standard_normal(3))]) + 0.01 * rng.standard_normal((1000, 4))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        reduced, info, wh, xini = ident(w[:700], 2, 2, n=3)
+    radius = np.max(np.abs(np.linalg.eigvals(info.reduction.identified.A)))
+    print(f"order 4: spectral radius {radius:.3f}; order 3: {info.reduction.method}, {info.reduction.misfits}")
+    assert reduced.nstates == 3 and np.max(np.abs(np.linalg.eigvals(reduced.A))) < 1
+    fit = validate(reduced, w[700:, :2], w[700:, 2:]).mean_fit
+    assert fit > validate(plant, w[700:, :2], w[700:, 2:]).mean_fit - 1
+    assert info.M <= 1.2 * misfit(w[:700], plant)[0]
