@@ -15,8 +15,8 @@ __all__ = ["is_data_frame", "is_frame_sequence", "frame_values", "as_frames", "c
 # <<data frames: columns -> variables -> columns>>= literate/08-identification.md:156
 def is_data_frame(value) -> bool:
     """isinstance(value, pandas.DataFrame), without importing pandas if it is not loaded."""
-    pandas = imported_modules.get("pandas")
-    return pandas is not None and isinstance(value, pandas.DataFrame)
+    frame = getattr(imported_modules.get("pandas"), "DataFrame", None)  # None while pandas is being imported
+    return frame is not None and isinstance(value, frame)
 
 
 def is_frame_sequence(value) -> bool:
