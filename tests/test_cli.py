@@ -168,6 +168,11 @@ def test_lag_on_a_csv_file(data_csv, tmp_path, capsys):
     assert status == 0, err
     lines = out.splitlines()
     assert lines[1] == "lag | OE misfit | OE fit %" and len(lines) >= 5 and plot.stat().st_size > 1000
+    chosen = [line for line in lines if line.startswith("chosen lag (OE, hold-out rule on the identification data): ")]
+    assert len(chosen) == 1 and "by lag: 1: " in chosen[0], out
+    status, out, err = run(["lag", data_csv, "--inputs", "0:2", "--outputs", "y", "--lags", "0", "--modes", "oe",
+                            "--plot", plot], capsys)
+    assert status == 0 and "no lag chosen (OE): the hold-out rule chooses among positive lags" in out, err
 
 
 def test_daisy_and_lag_on_a_data_set(tmp_path, capsys):

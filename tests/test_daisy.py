@@ -288,6 +288,20 @@ def test_runner_on_two_small_sets(shared, tmp_path):
     assert [row["set"] for row in rows] == ["erie", "robot_arm"] and float(rows[1]["eiv_fit"]) > 90
 
 
+def test_results_read_back_give_the_same_files(shared, tmp_path):
+    # load_results is write_results read backwards: the files drawn again from results.json are the same
+    results = daisy_runner.run_benchmark(["erie", "robot_arm"], directory=shared, download_missing=False,
+                                         progress=None)
+    first = daisy_report.write_results(results, tmp_path / "a", settings={"init": "auto"})
+    loaded = daisy_report.load_results(first["json"])
+    assert [r.name for r in loaded] == ["erie", "robot_arm"]
+    assert loaded[1].modes["eiv"].candidates[2].start == "subspace"
+    assert loaded[1].modes["eiv"].candidates[2].fit == results[1].modes["eiv"].candidates[2].validation.mean_fit
+    again = daisy_report.write_results(loaded, tmp_path / "b", settings={"init": "auto"})
+    for key in ("markdown", "csv", "json", "figure"):
+        assert first[key].read_bytes() == again[key].read_bytes(), key
+
+
 def test_committed_results_hold_no_date_version_or_time_and_repeat_byte_for_byte(shared, tmp_path):
     # the four files of a run go into docs/ and are committed: the same data and code must give the same
     # bytes; the date, the versions and the seconds go to the run log only

@@ -22,7 +22,8 @@ import numpy as np
 import threadpoolctl
 
 from ident.caller import warn_at_caller
-from ident.identification import IdentInfo, checked_integer, ident
+from ident.data_forms import checked_integer
+from ident.identification import IdentInfo, ident
 from ident.representations import is_state_space, make_ss
 
 if TYPE_CHECKING:
