@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import warnings
 
 import control
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 
 from conftest import SHARED
 from ident.identification import ident, misfit
+from ident.solver import SLRAWarning
 from ident.representations import make_ss, markov_parameters, random_system, simulate
 
 REFERENCE = SHARED / "reference"
@@ -310,3 +312,33 @@ def test_sys0_is_the_only_start() -> None:
     _, again, _, _ = ident(w, 1, 3, wini=0, sys0=first.Rh)
     assert again.start == "sys0" and [c.start for c in again.candidates] == ["sys0"]
     assert again.M <= first.M * (1 + 1e-9)
+
+
+def test_a_result_worse_than_the_model_y_0_is_not_converged() -> None:
+    # two short noisy trajectories from rest (the data of 08-identification's choice among the starts,
+    # other draws): from the paper's start the solver stops after one iteration at a misfit far above
+    # ||y||^2, the misfit of the model y = 0, and used to call it converged
+    true_system = random_system(1, 1, 3, np.random.default_rng(3))
+    rng = np.random.default_rng(9)
+    w = []
+    for n_samples in (30, 50):
+        u = rng.standard_normal((n_samples, 1))
+        exact, direction = np.hstack([u, simulate(true_system, u)]), rng.standard_normal((n_samples, 2))
+        noise = np.zeros_like(exact)
+        noise[:, 1] = direction[:, 1]
+        w.append(exact + 0.05 * np.linalg.norm(exact) * noise / np.linalg.norm(noise))
+    output_energy = sum(np.sum(series[:, 1] ** 2) for series in w)
+    with pytest.warns(SLRAWarning, match=r"above \|\|y\|\|\^2 = .*model y = 0") as caught:
+        _, info, _, _ = ident(w, 1, 3, exct=[0], wini=0, init="lra")
+    assert caught[0].filename == __file__  # at the caller's line
+    assert info.M > output_energy and not info.converged and "model y = 0" in info.message
+    assert not info.candidates[0].converged
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SLRAWarning)
+        _, default, _, _ = ident(w, 1, 3, exct=[0], wini=0)  # another start finds a real minimum
+    assert default.converged and default.M < 0.1 * output_energy
+    # the bound is that of the model y = 0 only where that model is a candidate
+    from ident.identification import trivial_misfit
+    assert trivial_misfit(w, [None, None], 1, (0,)) == pytest.approx(output_energy, rel=1e-12)
+    assert trivial_misfit(w, [None, None], 1, (1,)) == np.inf  # an exact output: y = 0 cannot match it
+    assert trivial_misfit(w, [np.ones((3, 2)), None], 1, ()) == np.inf  # given initial outputs not zero
