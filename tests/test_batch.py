@@ -15,6 +15,7 @@ import sys
 import threading
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -344,3 +345,48 @@ def test_a_worker_killed_in_the_middle_of_a_run_loses_nothing() -> None:
     assert all(r.ok for r in results), [r.error for r in results]
     for first, second in zip(expected, results):
         assert_identical(first, second)
+
+
+# ------------------------------------------------------------------- the sweeps on an executor
+def test_choose_lag_on_a_dask_cluster_is_the_serial_choice() -> None:
+    pytest.importorskip("distributed")
+    from ident import choose_lag
+    rng = np.random.default_rng(7)
+    system = random_system(1, 1, 2, rng)
+    w = trajectory(rng, system, 200, noise=0.01)
+    here = choose_lag(w, 1, range(1, 4), exct=[0])
+    with dask_executor(workers=2) as executor:
+        there = choose_lag(w, 1, range(1, 4), exct=[0], executor=executor)
+    assert there.ell == here.ell and there.lags == here.lags
+    assert np.array_equal(there.misfits, here.misfits) and np.array_equal(there.holdout_fits, here.holdout_fits)
+
+
+@pytest.mark.parametrize("executor", [3, concurrent.futures.ProcessPoolExecutor])
+def test_the_sweeps_name_an_executor_that_is_not_one(executor) -> None:
+    from ident import choose_lag
+    from ident.daisy_runner import run_benchmark
+    w = trajectory(np.random.default_rng(1), random_system(1, 1, 1, np.random.default_rng(1)), 60, noise=0.1)
+    with pytest.raises(TypeError, match="executor must be"):
+        choose_lag(w, 1, [1, 2], executor=executor)
+    with pytest.raises(TypeError, match="executor must be"):
+        ident(w, 1, 1, executor=executor)
+    with pytest.raises(TypeError, match="executor must be"):
+        run_benchmark(["erie"], executor=executor, progress=None)
+
+
+def test_the_daisy_runner_on_a_dask_cluster_writes_the_serial_files(tmp_path) -> None:
+    pytest.importorskip("distributed")
+    from ident import daisy_report
+    from ident.daisy_runner import run_benchmark
+    data = Path(__file__).resolve().parents[2] / "shared" / "daisy"
+    if not (data / "robot_arm.dat").is_file():
+        pytest.skip(f"the DAISY files are not in {data}")
+    names = ["erie", "robot_arm", "dryer"]
+    serial = run_benchmark(names, directory=data, download_missing=False, progress=None)
+    with dask_executor(workers=2) as executor:
+        remote = run_benchmark(names, directory=data, download_missing=False, progress=None, executor=executor)
+    assert [r.name for r in remote] == names and all(x.model is not None for r in remote for x in r.modes.values())
+    first = daisy_report.write_results(serial, tmp_path / "serial")
+    second = daisy_report.write_results(remote, tmp_path / "dask")
+    for key in ("markdown", "csv", "json", "figure"):
+        assert first[key].read_bytes() == second[key].read_bytes(), key

@@ -381,3 +381,30 @@ def test_identify_data_at_an_extreme_scale(data_csv, tmp_path, capsys):
     saved = json.loads(model.read_text())  # valid JSON: an overflowing misfit is null, not Infinity
     assert saved["misfit"] is None and saved["fit"] > 95
     assert "warning: ident: the misfit" in out and "beyond the floating-point range" in out
+
+
+def test_daisy_workers_and_scheduler_are_checked(tmp_path, capsys, monkeypatch):
+    status, _, err = run(["daisy", "erie", "--workers", "0", "--out", tmp_path / "a"], capsys)
+    assert status == 2 and "--workers: must be a positive integer, got 0" in err
+    status, _, err = run(["daisy", "erie", "--workers", "-2", "--out", tmp_path / "a"], capsys)
+    assert status == 2 and "--workers" in err
+    status, _, err = run(["daisy", "erie", "--workers", "2", "--scheduler", "tcp://127.0.0.1:9", "--out",
+                          tmp_path / "a"], capsys)
+    assert status == 2 and "--scheduler: not allowed with argument --workers" in err
+    pytest.importorskip("distributed")
+    monkeypatch.setattr(cli, "SCHEDULER_TIMEOUT", 1.0)
+    status, _, err = run(["daisy", "erie", "--scheduler", "tcp://127.0.0.1:9", "--out", tmp_path / "a"], capsys)
+    assert status == 2 and "--scheduler: cannot reach the Dask scheduler at 'tcp://127.0.0.1:9'" in err
+    assert not (tmp_path / "a").exists()
+
+
+def test_daisy_on_two_workers_writes_the_serial_files(tmp_path, capsys):
+    pytest.importorskip("distributed")
+    if not (SHARED / "erie.dat").is_file():
+        pytest.skip(f"the DAISY files are not in {SHARED}")
+    common = ["daisy", "erie", "robot_arm", "--data-dir", SHARED, "--no-download", "--quiet", "--maxiter", "50"]
+    assert run([*common, "--out", tmp_path / "serial"], capsys)[0] == 0
+    status, out, err = run([*common, "--out", tmp_path / "dask", "--workers", "2"], capsys)
+    assert status == 0, err
+    for name in ("table.md", "table.csv", "results.json", "figure1.png"):
+        assert (tmp_path / "serial" / name).read_bytes() == (tmp_path / "dask" / name).read_bytes(), name
