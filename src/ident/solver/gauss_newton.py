@@ -8,10 +8,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.lib.stride_tricks import as_strided, sliding_window_view
+from numpy.lib.stride_tricks import sliding_window_view
 
 from ident.solver.groups import Group
-from ident.solver.products import free_rows
+from ident.solver.products import end_to_end, free_rows
 
 # <<Gauss-Newton matrix of the correction residual>>= literate/12-solver-cost.md:239
 def normal_equations(problem, state, free) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -207,7 +207,7 @@ def _c_bases(data: _GroupData, series: slice, bases: _Bases, structure, start: i
                 flat, length = segment.reshape(-1), segment.shape[1]
                 for c in range(n_eqs):
                     correlation = np.correlate(flat, weighted_kernel[c], "valid")
-                    c_bases[v][a, :, :, c] = as_strided(correlation, (n_batch, width), (length * 8, 8))
+                    c_bases[v][a, :, :, c] = end_to_end(correlation, n_batch, width, length)
     return c_bases
 
 
