@@ -471,16 +471,14 @@ def test_delayed_products_match_direct_sums():
     n_base, n_eqs, max_delay = 3, 2, 3
     delays = np.array([0, 1, 3])
     for n in (2, 10):  # shorter and longer than max_delay
-        for n_series in (1, 3):
-            extended = rng.standard_normal((n_base, n_series, (max_delay + n) * n_eqs))
-            products = gauss_newton.delayed_products(extended[:, :, : max_delay * n_eqs],
-                                                     extended[:, :, max_delay * n_eqs:], delays, max_delay, n, n_eqs)
-            blocks = extended.reshape(n_base, n_series, max_delay + n, n_eqs)
-            for i1, d1 in enumerate(delays):
-                for i2, d2 in enumerate(delays):
-                    direct = sum(blocks[:, k, max_delay + t - d1] @ blocks[:, k, max_delay + t - d2].T
-                                 for t in range(n) for k in range(n_series))
-                    assert np.allclose(products[i1, i2], direct, rtol=1e-12, atol=1e-12)
+        extended = rng.standard_normal((n_base, (max_delay + n) * n_eqs))
+        products = gauss_newton.delayed_products(extended[:, : max_delay * n_eqs], extended[:, max_delay * n_eqs:],
+                                                 delays, max_delay, n, n_eqs)
+        blocks = extended.reshape(n_base, max_delay + n, n_eqs)
+        for i1, d1 in enumerate(delays):
+            for i2, d2 in enumerate(delays):
+                direct = sum(blocks[:, max_delay + t - d1] @ blocks[:, max_delay + t - d2].T for t in range(n))
+                assert np.allclose(products[i1, i2], direct, rtol=1e-12, atol=1e-12)
 
 
 @pytest.mark.parametrize("make", [general_structure, grouped_structure])
