@@ -101,7 +101,9 @@ def run_slra(series, maxiter=100):
     p = structure.params_from_series(series)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SLRAWarning)
+        started = time.process_time()
         result = slra(p, structure, 10, maxiter=maxiter)
+        result.cpu = time.process_time() - started
     return structure, p, result
 
 
@@ -109,7 +111,8 @@ def case_scale(n_samples, memory=False):
     import numpy as np
     structure, p, result = run_slra([system_data(n_samples)])
     out = {"seconds": result.time, "iterations": result.iterations, "nfev": result.nfev,
-           "per_iteration": result.time / max(result.iterations, 1), "misfit": result.misfit}
+           "per_iteration": result.time / max(result.iterations, 1),
+           "cpu_per_iteration": result.cpu / max(result.iterations, 1), "misfit": result.misfit}
     Problem = _problem_class()
     problem = Problem(p, structure)
     free = _chart_class().from_kernel(result.R).free_columns
@@ -157,7 +160,8 @@ def _one_thread():
 def case_split(n_series, n_samples):
     structure, p, result = run_slra(split_data(n_series, n_samples))
     return {"seconds": result.time, "iterations": result.iterations, "nfev": result.nfev,
-            "per_iteration": result.time / max(result.iterations, 1), "misfit": result.misfit}
+            "per_iteration": result.time / max(result.iterations, 1),
+            "cpu_per_iteration": result.cpu / max(result.iterations, 1), "misfit": result.misfit}
 
 
 def case_short(n_series, n_samples):
@@ -248,26 +252,24 @@ def main(argv):
     rounds = int(options.get("rounds", 3))
     print(f"old {old}\nnew {new}\nload average at start {os.getloadavg()}", flush=True)
     for case in cases:
-        best = {"old": None, "new": None}
-        peaks = []
+        runs = {"old": [], "new": []}
         for k in range(rounds):
             order = [("old", old), ("new", new)] if k % 2 == 0 else [("new", new), ("old", old)]
             for label, root in order:
                 result = run_version(root, case)
-                peaks.append(result["peak_gflops"])
-                key = "per_iteration" if "per_iteration" in result else "peak_gflops"
-                if best[label] is None or result.get(key, 0) < best[label].get(key, 0):
-                    best[label] = result
+                runs[label].append(result)
                 print(f"  {case} round {k + 1} {label}: " + ", ".join(
                     f"{name} {value:.4g}" if isinstance(value, float) else f"{name} {value}"
                     for name, value in result.items() if not isinstance(value, dict)), flush=True)
-        print(f"{case}: best of {rounds}; machine peak {max(peaks):.1f} GFLOP/s (one thread, best); "
+        peak = max(r["peak_gflops"] for label in runs for r in runs[label])
+        print(f"{case}: best of {rounds} per measure; machine peak {peak:.1f} GFLOP/s (one thread, best); "
               f"load average now {os.getloadavg()[0]:.1f}")
-        for name in best["old"]:
-            a, b = best["old"][name], best["new"].get(name)
-            if isinstance(a, (int, float)) and isinstance(b, (int, float)) and name != "peak_gflops":
-                ratio = b / a if a else float("nan")
-                print(f"    {name:22s} old {a:12.5g}  new {b:12.5g}  new/old {ratio:7.3f}")
+        for name, value in runs["old"][0].items():
+            if name == "peak_gflops" or not isinstance(value, (int, float)):
+                continue
+            a = min(r[name] for r in runs["old"])
+            b = min(r.get(name, float("nan")) for r in runs["new"])
+            print(f"    {name:22s} old {a:12.5g}  new {b:12.5g}  new/old {b / a if a else float('nan'):7.3f}")
         print(flush=True)
 
 
