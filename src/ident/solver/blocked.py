@@ -109,9 +109,9 @@ class StationaryPart:
         n_blocks = x.shape[1] // n_rhs
         x = np.asfortranarray(x)
         x = blas.dtrmm(1.0, np.asfortranarray(reverse.inverse[::-1, ::-1]), x, lower=0, overwrite_b=1)
-        heads = x[:p]  # (p, K R): the first p rows of every block, after T^{-T}
+        heads = np.array(x[:p], order="F")  # (p, K R): the first p rows of every block, after T^{-T}
         head_coupling = reverse.tail[::-1, ::-1]  # of the first p rows to the first p rows of the next block
-        g = np.array(heads, order="F")
+        g = heads.copy()
         for j in range(1, len(reverse.filter)):  # wrong only in the last j blocks of each right-hand side
             g[:, : heads.shape[1] - j] += reverse.filter[j][::-1, ::-1] @ heads[:, j:]
         by_block, heads_by_block = g.reshape((p, n_blocks, n_rhs), order="F"), heads.reshape((p, n_blocks, n_rhs), order="F")
@@ -177,8 +177,8 @@ class StationaryPart:
         """_recursion() as the filter h_k = sum_{j<J} P_j t_{k-j}: one product per term for all blocks,
         and the first J - 1 blocks of each right-hand side by the recursion from the history."""
         p, nb, powers = self.p, self.nb, direction.filter
-        tails = x[nb - p:]  # (p, K R), column k + K r holding t_k of right-hand side r: a view
-        h = np.array(tails, order="F")
+        tails = np.array(x[nb - p:], order="F")  # (p, K R), column k + K r holding t_k of right-hand side r
+        h = tails.copy()
         for j in range(1, len(powers)):  # wrong only in the first j blocks of each right-hand side
             h[:, j:] += powers[j] @ tails[:, : tails.shape[1] - j]
         by_block, tails_by_block = h.reshape((p, n_blocks, n_rhs), order="F"), tails.reshape((p, n_blocks, n_rhs), order="F")
