@@ -70,6 +70,7 @@ MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".gif"
         ".svg": "image/svg+xml", ".webp": "image/webp"}
 TEXT_COLUMNS = 88  # characters of code that fit in the text column (45rem at the CSS below)
 TEXT_WIDTH_PX = 720  # the text column in CSS pixels; a wider figure widens its example
+FRONT_SECTIONS = {"quick-start"}  # sections that belong to the front matter the index shows
 CAPTION = re.compile(r"^\s*#\s*caption:\s*(?P<caption>\S.*?)\s*$")  # in an example: its figure's caption
 PLACEHOLDER = "WEAVEREF{}X"
 BLOCK_PLACEHOLDER = "WEAVEVALUE{}X"
@@ -816,12 +817,13 @@ class PageRenderer:
     def render_example(self, block: tangle.Block) -> str:
         anchor = self.weave.xref.examples[block.location]
         result = self.results.get(block.location)
-        lines = block.lines + (result.stdout.splitlines() + result.stderr.splitlines() if result else [])
+        code = [line for line in block.lines if not CAPTION.match(line)]  # a caption shows under its figure
+        lines = code + (result.stdout.splitlines() + result.stderr.splitlines() if result else [])
         large = result is not None and any((f.width or 0) > TEXT_WIDTH_PX for f in result.figures)
         parts = [f'<div class="example{" wide" if large else wide(lines)}" id="{anchor}">',
                  f'<div class="example-head"><a href="#{anchor}" title="{html.escape(str(block.location))}">'
                  f'Example</a>: {html.escape(block.name)}</div>',
-                 self.highlight_block(block.lines, "python", widen=False).rstrip("\n")]
+                 self.highlight_block(code, "python", widen=False).rstrip("\n")]
         if result is not None:
             if result.stdout:
                 parts.append(f'<pre class="output" aria-label="output">'
@@ -880,7 +882,7 @@ class PageRenderer:
         title = next((plain for level, _, _, plain in headings if level == 1), Path(self.page).stem)
         headings = [(level, anchor, label) for level, anchor, label, _ in headings]
         first_section = next((k for k, t in enumerate(tokens) if k > title_end and t.type == "heading_open"
-                              and t.tag == "h2"), len(tokens))
+                              and t.tag == "h2" and t.attrGet("id") not in FRONT_SECTIONS), len(tokens))
         front = self.md.renderer.render(tokens[title_end + 1:first_section], self.md.options, env)
         return Page(self.document, self.page, title, headings, head, body, front)
 
@@ -918,7 +920,7 @@ class Page:
     headings: list[tuple[int, str, str]]  # level, id, label (HTML)
     head: str  # the HTML up to and including the title
     body: str
-    front: str = ""  # the HTML between the title and the first section: the abstract of the first page
+    front: str = ""  # the HTML between the title and the first section (a quick start counts as front)
 
 
 # --------------------------------------------------------------------------------------------
@@ -961,6 +963,14 @@ img { max-width: 100%; height: auto; }
 math { font-family: "STIX Two Math", "Latin Modern Math", "Cambria Math", "TeX Gyre Pagella Math",
   "DejaVu Math TeX Gyre", math; font-size: 1.05em; }
 .math-display { overflow-x: auto; overflow-y: hidden; margin: .9em 0; padding: .1em 0; }
+/* a formula or table wider than the column scrolls within itself; a shadow at an edge shows that
+   there is more (the covers move with the content, the shadows stay with the box) */
+.math-display, table { background: linear-gradient(to right, #fff 30%, rgba(255, 255, 255, 0)),
+  linear-gradient(to left, #fff 30%, rgba(255, 255, 255, 0)) 100% 0,
+  radial-gradient(farthest-side at 0 50%, rgba(0, 0, 0, .18), rgba(0, 0, 0, 0)),
+  radial-gradient(farthest-side at 100% 50%, rgba(0, 0, 0, .18), rgba(0, 0, 0, 0)) 100% 0;
+  background-repeat: no-repeat; background-size: 2.5em 100%, 2.5em 100%, .8em 100%, .8em 100%;
+  background-attachment: local, local, scroll, scroll; }
 .math-error { color: #b42318; }
 nav.toc { border: 1px solid var(--rule); border-radius: 4px; padding: .5em 1em; margin: 1em 0 1.5em;
   font-size: .92em; background: #fbfcfd; }

@@ -176,8 +176,8 @@ CASES = [
      ValueError, 'exct marks 2 variables exact, but a model with m = 1 inputs.*at most 1 can be exact'),
     ('exct autonomous', lambda: ident(W, 0, 1, exct=[2]),
      ValueError, 'exct marks 1 variables exact, but a model with m = 0 inputs'),
-    ('misfit exct more than m', lambda: misfit(W, SYS, exct=[1, 2]),
-     ValueError, 'exct marks 2 variables exact, but a model with m = 1 inputs'),
+    ('misfit exact outputs the model cannot meet', lambda: misfit(W, SYS, exct=[1, 2]),
+     ValueError, 'exct: no trajectory of sysh meets the exact values of series 0'),
     # sys0 and sysh: real, finite, of full row rank, feasible; named as the caller's argument
     ('sys0 rank deficient', lambda: ident(W, 1, 1, sys0=np.ones((2, 6))),
      ValueError, 'sys0 gives a kernel R of rank 1, but a model with p = 2 outputs needs 2 independent rows'),

@@ -182,12 +182,57 @@ def test_text_width_is_limited(checked) -> None:
     assert 0 < r["textWidth"] <= 46 * r["fontSize"], r
 
 
-def test_screenshot_of_the_first_screen(woven, tmp_path_factory) -> None:
+WIDTH_SCRIPT = """<script>
+window.addEventListener("load", function () {
+  function scrolls(e) {  // inside a box that scrolls or clips on its own (a formula, code, a table)
+    for (var a = e.parentElement; a && a.tagName !== "MAIN"; a = a.parentElement) {
+      var o = getComputedStyle(a).overflowX;
+      if (o === "auto" || o === "scroll" || o === "hidden") { return true; }
+    }
+    return false;
+  }
+  var beyond = [];
+  document.querySelectorAll("main *").forEach(function (e) {
+    var box = e.getBoundingClientRect();
+    if (box.right > window.innerWidth + 1 && !scrolls(e)) {
+      beyond.push(e.tagName.toLowerCase() + ": " + (e.textContent || "").slice(0, 60));
+    }
+  });
+  var out = document.createElement("pre");
+  out.id = "width-results";
+  out.textContent = JSON.stringify({beyond: beyond.slice(0, 10), count: beyond.length,
+                                    page: document.documentElement.scrollWidth, window: window.innerWidth});
+  document.body.appendChild(out);
+});
+</script>"""
+
+
+@pytest.mark.parametrize("width", [1280, 500])  # 500: the narrowest window headless Chromium makes
+def test_wide_formulas_and_tables_fit_or_scroll_within_themselves(woven, tmp_path_factory, width) -> None:
+    """At a desktop width and a narrow window, nothing makes the page wider than the window: a formula, a
+    table or code wider than the column scrolls within its own box."""
+    profile = tmp_path_factory.mktemp(f"chromium-width-{width}")
+    for page in sorted(woven.glob("*.html")):
+        copy = page.with_name(f"width-{page.name}")
+        copy.write_text(page.read_text(encoding="utf-8").replace("</body>", WIDTH_SCRIPT + "\n</body>", 1),
+                        encoding="utf-8")
+        done = chromium([f"--window-size={width},900", "--virtual-time-budget=5000", "--dump-dom", copy.as_uri()],
+                        profile)
+        copy.unlink()
+        found = re.search(r'<pre id="width-results">(.*?)</pre>', done.stdout, re.S)
+        assert found, f"{page.name}: no result at width {width}: {done.stderr[-1000:]}"
+        result = json.loads(html.unescape(found[1]))
+        assert result["count"] == 0 and result["page"] <= result["window"], f"{page.name} at {width} px: {result}"
+
+
+def test_screenshots_at_desktop_and_phone_widths(woven, tmp_path_factory) -> None:
     folder = Path(os.environ.get("IDENT_SCREENSHOT_DIR") or tmp_path_factory.mktemp("screenshots"))
     folder.mkdir(parents=True, exist_ok=True)
     profile = tmp_path_factory.mktemp("chromium-screenshot-profile")
-    for name in ("index.html", "01-introduction.html"):
-        target = folder / name.replace(".html", ".png")
-        done = chromium(["--window-size=1280,900", f"--screenshot={target}", (woven / name).as_uri()], profile)
-        assert target.is_file() and target.stat().st_size > 10_000, done.stderr[-2000:]
-        print(f"screenshot of {name}: {target}")
+    for name in ("index.html", "01-introduction.html", "04-daisy.html", "10-solver-inner-problem.html"):
+        for width in (1280, 500):
+            target = folder / name.replace(".html", f"-{width}.png")
+            done = chromium([f"--window-size={width},900", f"--screenshot={target}", (woven / name).as_uri()],
+                            profile)
+            assert target.is_file() and target.stat().st_size > 10_000, done.stderr[-2000:]
+            print(f"screenshot of {name} at {width} px: {target}")

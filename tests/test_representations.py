@@ -369,3 +369,16 @@ def test_kernel_is_read_off_an_observer_form_exactly():
         np.testing.assert_allclose(ss_to_kernel(sys), R, rtol=0, atol=1e-14 * np.abs(R).max())
     other = random_system(1, 1, 2, rng)  # not in observer form: no read-off
     assert observer_form_kernel(*(np.asarray(x, dtype=float) for x in (other.A, other.B, other.C, other.D)), 2) is None
+
+
+def test_ill_conditioning_warnings_point_at_the_callers_line() -> None:
+    import warnings
+
+    from ident.representations import IllConditionedWarning, kernel_to_ss
+
+    nearly_singular = np.array([[0.3, 1.0, 1e-10, -1e-10]])  # m = 1, ell = 1: P_1 = 1e-10
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        kernel_to_ss(nearly_singular, 1, 1)
+    assert [w.category for w in caught] == [IllConditionedWarning]
+    assert caught[0].filename == __file__

@@ -8,6 +8,7 @@ import matplotlib
 import numpy as np
 import pytest
 
+from ident import misfit
 from ident.representations import make_ss, p_ell_condition, random_system, simulate
 from ident.validation import (LagCurve, fit_percent, misfit_vs_lag, plot_lag_curves, spectral_radius,
                               split_for_validation, validate)
@@ -121,6 +122,27 @@ def test_the_lag_plot_is_labelled(tmp_path):
     assert bottom.get_xlabel() == "lag ell"
     labels = [text.get_text() for text in top.get_legend().get_texts()]
     assert labels == ["output error", "curve 2", "lag of Table 1 (ell = 2)"]
+
+
+def test_the_errors_in_variables_misfit_of_validation_data() -> None:
+    """Validation.misfit is misfit(w, sys) of the validation data, at most the simulation's squared
+    error (inputs may be corrected too), the same in any units, and defined for unstable models."""
+    rng = np.random.default_rng(21)
+    model = random_system(1, 2, 2, rng)
+    u = rng.standard_normal((300, 1))
+    y = simulate(model, u, rng.standard_normal(4)) + 0.2 * rng.standard_normal((300, 2))
+    u_noisy = u + 0.2 * rng.standard_normal(u.shape)
+    checked = validate(model, u_noisy, y)
+    assert checked.misfit == pytest.approx(misfit(np.hstack([u_noisy, y]), model)[0], rel=1e-10)
+    assert checked.misfit <= np.sum((y - checked.yh) ** 2) * (1 + 1e-9)
+    assert 0 < checked.eiv_fit < 100
+    scaled = validate(model, 1e150 * u_noisy, 1e150 * y)
+    assert scaled.eiv_fit == pytest.approx(checked.eiv_fit, rel=1e-12)
+    unstable = make_ss([[1.2, 0.0], [0.0, 0.5]], [[1.0], [1.0]], [[1.0, 1.0], [0.0, 1.0]], [[0.0], [0.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        verdict = validate(unstable, u_noisy, y)
+    assert verdict.fit.tolist() == [0.0, 0.0] and np.isfinite(verdict.misfit) and 0 <= verdict.eiv_fit <= 100
 
 
 def test_split_for_validation_is_the_papers_rule():

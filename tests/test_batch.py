@@ -1,0 +1,346 @@
+"""ident.batch: many identifications through an executor, the same results wherever they run.
+
+The Dask tests need ``distributed`` (in the ``test`` extra) and skip without it. Each starts a local
+cluster of two worker processes: a few seconds, kept to three clusters in the module.
+"""
+from __future__ import annotations
+
+import concurrent.futures
+import dataclasses
+import multiprocessing
+import os
+import pickle
+import signal
+import sys
+import threading
+import time
+import warnings
+
+import numpy as np
+import pytest
+import threadpoolctl
+
+from ident import Job, JobResult, SLRAWarning, dask_executor, ident, run_jobs
+from ident.batch import run_job
+from ident.representations import random_system, simulate
+
+
+def trajectory(rng, system, n_samples, noise=0.1, x0=True):
+    u = rng.standard_normal((n_samples, system.ninputs))
+    x_init = rng.standard_normal(system.nstates) if x0 else None
+    w0 = np.hstack([u, simulate(system, u, x_init)])
+    return w0 + noise * rng.standard_normal(w0.shape)
+
+
+def mixed_jobs() -> list[Job]:
+    """Jobs of every kind: data forms, modes, initial conditions, starts, m = 0, and one that fails."""
+    rng = np.random.default_rng(11)
+    siso = random_system(1, 1, 2, rng)
+    mimo = random_system(2, 2, 2, rng)
+    autonomous = random_system(0, 2, 2, rng)
+    w = trajectory(rng, siso, 300)
+    return [
+        Job(w, 1, 2, label="errors-in-variables"),
+        Job(w, 1, 2, {"exct": [0]}, label="output error"),
+        Job([trajectory(rng, siso, 40, x0=False), trajectory(rng, siso, 70, x0=False)], 1, 2, {"wini": 0},
+            label="two series from rest"),
+        Job(np.stack([trajectory(rng, siso, 60) for _ in range(3)], axis=2), 1, 2, label="T x q x N"),
+        Job(w, 1, 2, {"sys0": siso, "maxiter": 50}, label="sys0 as a StateSpace"),
+        Job(trajectory(rng, mimo, 3000, noise=0.2), 2, 2, {"tol": 1e-7}, label="2 x 2, T = 3000"),
+        Job(trajectory(rng, autonomous, 200), 0, 2, label="m = 0"),
+        Job(w[:4], 1, 2, label="too short"),
+    ]
+
+
+def assert_identical(first: JobResult, second: JobResult) -> None:
+    """Bit for bit the same outputs (times and the worker aside), with a message that names the job."""
+    assert first.job is second.job
+    assert first.identical_to(second), (first.job.label, first.error, second.error)
+
+
+@pytest.fixture(scope="module")
+def jobs() -> list[Job]:
+    return mixed_jobs()
+
+
+@pytest.fixture(scope="module")
+def serial(jobs) -> list[JobResult]:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SLRAWarning)
+        return run_jobs(jobs)
+
+
+# --------------------------------------------------------------------------------------------
+# jobs and results
+
+
+def test_a_job_is_checked_when_it_is_made() -> None:
+    w = np.zeros((10, 2))
+    with pytest.raises(ValueError, match="m must satisfy 0 <= m"):
+        Job(w, -1, 2)
+    with pytest.raises(TypeError, match="ell must be an integer"):
+        Job(w, 1, 1.5)
+    with pytest.raises(TypeError, match=r"options holds exact, which ident does not take; .*exct"):
+        Job(w, 1, 2, {"exact": [0]})
+    with pytest.raises(TypeError, match="options must be a mapping"):
+        Job(w, 1, 2, [("exct", [0])])
+    options = {"exct": [0]}
+    job = Job(w, np.int64(1), 2, options, label={"any": "label"})
+    options["maxiter"] = 3  # the job keeps its own copy
+    assert job.options == {"exct": [0]} and type(job.m) is int
+    with pytest.raises(AttributeError):
+        job.ell = 3  # frozen
+
+
+def test_serial_results_come_in_order_with_the_failure_reported(jobs, serial) -> None:
+    assert [r.job for r in serial] == jobs
+    assert [r.ok for r in serial] == [True] * 7 + [False]
+    failed = serial[-1]
+    assert failed.error.startswith("ValueError: w is too short for the model class m = 1, ell = 2")
+    assert "Traceback" in failed.traceback and "identification_rank" in failed.traceback
+    assert failed.sysh is None and failed.info is None
+    with pytest.raises(RuntimeError, match="job 'too short' failed: ValueError"):
+        failed.outputs
+    assert all(r.seconds > 0 and r.worker.endswith(f":{os.getpid()}") for r in serial)
+    sysh, info, wh, xini = serial[2].outputs
+    assert isinstance(wh, list) and [len(x) for x in wh] == [40, 70] and xini.shape == (2, 2)
+    assert serial[3].wh.shape == (60, 2, 3) and serial[6].sysh.ninputs == 0
+
+
+def test_a_job_gives_what_ident_gives(jobs, serial) -> None:
+    """run_job is ident on one BLAS thread; the same bits as calling ident so."""
+    for job, result in zip(jobs[:3], serial[:3]):
+        with threadpoolctl.threadpool_limits(limits=1):
+            sysh, info, wh, xini = ident(job.w, job.m, job.ell, **job.options)
+        assert info.M == result.info.M and np.array_equal(info.Rh, result.info.Rh)
+        assert np.array_equal(sysh.A, result.sysh.A) and np.array_equal(xini, result.xini)
+
+
+def test_jobs_and_results_pickle_with_their_models(jobs, serial) -> None:
+    job = pickle.loads(pickle.dumps(jobs[4]))  # sys0 is a StateSpace, which pickle cannot carry itself
+    assert np.array_equal(job.options["sys0"].A, jobs[4].options["sys0"].A) and job.options["maxiter"] == 50
+    for result in serial:
+        again = pickle.loads(pickle.dumps(result))
+        assert again.job.label == result.job.label
+        again = JobResult(**{**again.__dict__, "job": result.job})
+        assert_identical(result, again)
+
+
+def test_identical_to_sees_one_bit(serial) -> None:
+    result = serial[0]
+    assert result.identical_to(result) and not result.identical_to(serial[1]) and not result.identical_to(serial[-1])
+    assert serial[-1].identical_to(serial[-1])
+    nudged = result.wh.copy()
+    nudged[7, 1] = np.nextafter(nudged[7, 1], np.inf)
+    assert not result.identical_to(dataclasses.replace(result, wh=nudged))
+    info = dataclasses.replace(result.info, time=result.info.time + 1)  # times aside
+    assert result.identical_to(dataclasses.replace(result, info=info, seconds=0.0, cpu_seconds=0.0, worker="elsewhere:1"))
+    rh = result.info.Rh.copy()
+    rh[0, 0] = -rh[0, 0]
+    assert not result.identical_to(dataclasses.replace(result, info=dataclasses.replace(result.info, Rh=rh)))
+    with pytest.raises(TypeError, match="other must be a JobResult"):
+        result.identical_to(result.outputs)
+
+
+def test_warnings_of_a_job_point_at_the_caller() -> None:
+    rng = np.random.default_rng(5)
+    w = trajectory(rng, random_system(1, 1, 2, rng), 200, noise=0.3)
+    with pytest.warns(SLRAWarning, match=r"job 1 \(label 'stopped'\): .*maximum number of iterations") as caught:
+        results = run_jobs([Job(w, 1, 2, label="fine"), Job(w, 1, 2, {"maxiter": 1, "tol": 1e-12}, label="stopped")])
+    assert [w.filename for w in caught if issubclass(w.category, SLRAWarning)] == [__file__]
+    assert results[0].warnings == () and results[1].warnings[0][0] is SLRAWarning
+    assert not results[1].info.converged
+
+
+# --------------------------------------------------------------------------------------------
+# bad input
+
+
+def test_an_executor_that_is_not_one_is_named() -> None:
+    job = Job(np.zeros((10, 2)), 1, 1)
+    for executor, message in [(3, "executor must be None .* got int, which has no submit method"),
+                              ("dask", "got str"),
+                              (concurrent.futures.ProcessPoolExecutor,
+                               "executor must be an executor object, got the class ProcessPoolExecutor")]:
+        with pytest.raises(TypeError, match=message):
+            run_jobs([job], executor)
+
+
+def test_a_thread_pool_is_refused_and_jobs_sharing_a_process_are_flagged() -> None:
+    job = Job(np.zeros((10, 2)), 1, 1)
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:
+        with pytest.raises(TypeError, match="executor must run the jobs in processes, not in threads"):
+            run_jobs([job], pool)
+        rng = np.random.default_rng(3)
+        system = random_system(2, 2, 3, rng)
+        jobs = [Job(trajectory(rng, system, 40_000), 2, 3) for _ in range(2)]  # a few tenths of a second each
+        together = list(pool.map(run_job, jobs))  # run_job itself, in two threads at once
+    for result in together:
+        assert result.ok and result.warnings[-1][0] is RuntimeWarning
+        assert "ran at the same time as other jobs in threads of process" in result.warnings[-1][1]
+    assert run_job(jobs[0]).warnings == ()
+
+
+def test_jobs_that_are_not_jobs_are_named() -> None:
+    job = Job(np.zeros((10, 2)), 1, 1)
+    with pytest.raises(TypeError, match=r"got a single Job; pass \[job\]"):
+        run_jobs(job)
+    with pytest.raises(TypeError, match=r"jobs\[1\] is a tuple"):
+        run_jobs([job, (np.zeros((10, 2)), 1, 1)])
+    with pytest.raises(TypeError, match=r"jobs\[0\] is a str \(2 of the 2 items"):
+        run_jobs(["ab", "cd"])
+    with pytest.raises(TypeError, match="jobs must be a sequence of Job, got int"):
+        run_jobs(5)
+    with pytest.raises(TypeError, match="job must be a Job"):
+        run_job("job")
+    assert run_jobs([]) == [] and run_jobs(iter([job]))[0].job is job
+
+
+def test_what_the_executor_raises_is_that_jobs_error() -> None:
+    """An executor that cannot run a job (here: it fails every second one) does not stop the others."""
+
+    class Flaky:
+        def __init__(self):
+            self.count = 0
+
+        def submit(self, function, *args):
+            future = concurrent.futures.Future()
+            self.count += 1
+            if self.count % 2 == 0:
+                future.set_exception(OSError("the worker is gone"))
+            else:
+                future.set_result(function(*args))
+            return future
+
+    rng = np.random.default_rng(1)
+    w = trajectory(rng, random_system(1, 1, 1, rng), 100)
+    results = run_jobs([Job(w, 1, 1, label=k) for k in range(4)], Flaky())
+    assert [r.ok for r in results] == [True, False, True, False]
+    assert results[1].error == "OSError (raised by the executor): the worker is gone"
+    assert results[1].job.label == 1 and "OSError" in results[1].traceback
+
+
+def test_jobs_are_submitted_largest_first_and_returned_in_order() -> None:
+    class Recording:
+        def __init__(self):
+            self.order = []
+
+        def submit(self, function, job):
+            self.order.append(job.label)
+            future = concurrent.futures.Future()
+            future.set_result(function(job))
+            return future
+
+    rng = np.random.default_rng(2)
+    system = random_system(1, 1, 1, rng)
+    sizes = [50, 200, 80, 200, 120]
+    jobs = [Job(trajectory(rng, system, n), 1, 1, label=k) for k, n in enumerate(sizes)]
+    jobs.append(Job([trajectory(rng, system, 100), trajectory(rng, system, 60)], 1, 1, label=5))
+    executor = Recording()
+    results = run_jobs(jobs, executor)
+    assert executor.order == [1, 3, 5, 4, 2, 0]  # 200, 200 (ties in order), 160, 120, 80, 50 samples
+    assert [r.job.label for r in results] == list(range(6)) and all(r.ok for r in results)
+
+
+def test_dask_executor_arguments_are_checked() -> None:
+    for kwargs, error, message in [
+        ({"workers": 0}, ValueError, r"workers must satisfy 1 <= workers \(the number of worker processes\), got 0"),
+        ({"workers": -2}, ValueError, "got -2"),
+        ({"workers": 1.5}, TypeError, "workers must be an integer"),
+        ({}, ValueError, "give either workers=N .* got neither"),
+        ({"workers": 2, "scheduler": "tcp://localhost:8786"}, ValueError, "not both"),
+        ({"scheduler": ""}, TypeError, "scheduler must be the address"),
+        ({"workers": 1, "timeout": 0}, ValueError, "timeout must be a positive number"),
+    ]:
+        with pytest.raises(error, match=message):
+            with dask_executor(**kwargs):
+                pass
+
+
+def test_without_dask_the_error_says_what_to_install(monkeypatch) -> None:
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed now raises ImportError
+    with pytest.raises(ImportError, match=r"pip install 'ident\[distributed\]'"):
+        with dask_executor(workers=1):
+            pass
+
+
+def test_an_unreachable_scheduler_is_a_connection_error_naming_it() -> None:
+    pytest.importorskip("distributed")
+    started = time.perf_counter()
+    with pytest.raises(ConnectionError, match=r"cannot reach the Dask scheduler at 'tcp://127.0.0.1:9' within 1 s"):
+        with dask_executor(scheduler="tcp://127.0.0.1:9", timeout=1):
+            pass
+    assert time.perf_counter() - started < 30
+    with pytest.raises(ValueError, match="scheduler 'no port here' is not the address of a Dask scheduler"):
+        with dask_executor(scheduler="no port here", timeout=1):
+            pass
+
+
+# --------------------------------------------------------------------------------------------
+# the same results wherever the jobs run
+
+
+def test_a_process_pool_gives_the_serial_results(jobs, serial) -> None:
+    context = multiprocessing.get_context("spawn")  # fresh interpreters, as on another machine
+    with concurrent.futures.ProcessPoolExecutor(max_workers=2, mp_context=context) as pool:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", SLRAWarning)
+            pooled = run_jobs(jobs, pool)
+    assert len({r.worker for r in pooled}) >= 2 or len(jobs) < 2  # the jobs really ran elsewhere
+    assert all(not r.worker.endswith(f":{os.getpid()}") for r in pooled)
+    for first, second in zip(serial, pooled):
+        assert_identical(first, second)
+
+
+def test_a_dask_cluster_gives_the_serial_results(jobs, serial) -> None:
+    pytest.importorskip("distributed")
+    with dask_executor(workers=2) as executor:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", SLRAWarning)
+            remote = run_jobs(jobs, executor)
+    assert all(not r.worker.endswith(f":{os.getpid()}") for r in remote)
+    for first, second in zip(serial, remote):
+        assert_identical(first, second)
+
+
+def long_jobs(n_jobs: int) -> list[Job]:
+    """Jobs of a few tenths of a second each (a few iterations on 80 000 samples): a worker killed
+    soon after it started is in the middle of one."""
+    rng = np.random.default_rng(4)
+    system = random_system(2, 2, 3, rng)
+    return [Job(trajectory(rng, system, 80_000, noise=0.2), 2, 3, label=k) for k in range(n_jobs)]
+
+
+def test_a_worker_killed_in_the_middle_of_a_run_loses_nothing() -> None:
+    distributed = pytest.importorskip("distributed")
+    jobs = long_jobs(10)
+    expected = run_jobs(jobs)
+    killed = {}
+    with dask_executor(workers=2) as executor:
+        client = distributed.default_client()
+        pids = client.run(os.getpid)  # worker address -> process id
+
+        def kill_a_busy_worker():
+            deadline = time.monotonic() + 60
+            while time.monotonic() < deadline and not killed:
+                busy = [address for address, tasks in client.processing().items() if tasks]
+                if busy:
+                    time.sleep(0.2)  # into its job
+                    killed["pid"], killed["tasks"] = pids[busy[0]], client.processing()[busy[0]]
+                    os.kill(pids[busy[0]], signal.SIGKILL)
+                time.sleep(0.05)
+
+        killer = threading.Thread(target=kill_a_busy_worker)
+        killer.start()
+        results = run_jobs(jobs, executor)
+        killer.join()
+        assert killed.get("tasks"), "no worker was killed while it had a job"
+        for _ in range(100):  # the nanny starts a new worker process in place of the killed one
+            workers = client.run(os.getpid)
+            if len(workers) == 2:
+                break
+            time.sleep(0.2)
+        assert len(workers) == 2 and killed["pid"] not in workers.values()
+    assert all(r.ok for r in results), [r.error for r in results]
+    for first, second in zip(expected, results):
+        assert_identical(first, second)
