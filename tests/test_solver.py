@@ -724,3 +724,31 @@ def test_concurrent_calls_restore_the_callers_blas_threads():
                 thread.join()
             assert not errors, errors
             assert blas_threads() == before
+
+
+def test_exact_data_stop_at_the_rounding_level():
+    """The chain of 03-examples on exact data (seed 1 crept to maxiter at a misfit of rounding size on
+    some processors): ident stops as converged, well before maxiter, at a cost below the rounding
+    level of the data; on noisy data the level is far below the cost."""
+    import control
+
+    from ident import examples, ident
+    from ident.representations import make_ss, simulate
+
+    chain = examples.mass_spring_damper_chain()
+    sampled = control.sample_system(chain, 1, method="zoh")
+    model = make_ss(sampled.A, sampled.B, sampled.C, sampled.D)
+    n_masses = 7
+    x_rest = np.r_[np.arange(1.0, n_masses + 1), np.zeros(n_masses), 1.0]
+    u = np.random.default_rng(1).standard_normal((300, 1))
+    w = np.hstack([u, simulate(model, u, x_rest)])
+    _, info, _, _ = ident(w, 1, chain.nstates - 1, maxiter=100)
+    assert info.converged and info.iter < 100
+    assert info.M < 1e-16 * np.sum(w ** 2)
+
+    rng = np.random.default_rng(0)
+    structure = Structure.time_major(3, 2, [198])
+    p = structure.params_from_series([rng.standard_normal((200, 3))])
+    problem = Problem(p, structure)
+    state = problem.evaluate(initial_kernel(p, structure, 7))
+    assert 0 < problem.rounding_level(state) < 1e-20 * state.cost
