@@ -65,6 +65,9 @@ import tangle
 
 GENERATOR = "ident weave.py"
 FIGURE_DPI = 110
+# Pygments wraps every token in a span; names and punctuation have no rule in the default style, and
+# whitespace shows no colour, so their spans only add bytes (a third of the pages' size): unwrapped.
+UNSTYLED_TOKEN = re.compile(r'<span class="(?:n|p|w)">([^<]*)</span>')
 IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg", ".gif", ".svg", ".webp"}
 MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".gif": "image/gif",
         ".svg": "image/svg+xml", ".webp": "image/webp"}
@@ -752,7 +755,7 @@ class PageRenderer:
             lexer = get_lexer_by_name(language, stripnl=False, ensurenl=True)
         except ClassNotFound:
             lexer = TextLexer(stripnl=False, ensurenl=True)
-        return highlight(text, lexer, self.formatter)
+        return UNSTYLED_TOKEN.sub(r"\1", highlight(text, lexer, self.formatter))
 
     def highlight_block(self, lines: list[str], language: str, widen: bool = True) -> str:
         lines = trim_blank(lines)

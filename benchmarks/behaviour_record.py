@@ -1,7 +1,8 @@
 """Record the numbers a refactoring must keep, to compare two versions bitwise. Not a test.
 
-Records DAISY Table 1 by the runner with the paper's single start and with its three starts (both
-modes, every candidate), the solver alone on the Table 1 protocol (benchmarks/daisy_solver.py: EIV,
+Records DAISY Table 1 by the runner with the paper's single start and with its default starts (both
+modes, every candidate; before issue 13 the runner's three starts lra, arx, eiv, since then ident's
+init="auto"), the solver alone on the Table 1 protocol (benchmarks/daisy_solver.py: EIV,
 maxiter 100), and the misfits and iterations found in the namespaces of the examples of every
 literate document. Floats are stored as float.hex. Run it on two checkouts and compare:
 
@@ -42,17 +43,30 @@ def runner():
         from ident.daisy_runner import run_set
     except ImportError:  # before the DAISY modules were split
         from ident.daisy import run_set
+    import inspect
+    with_init = "init" in inspect.signature(run_set).parameters  # ident's own starts (issue 13) or the runner's
     single, three = {}, {}
     for name in SETS:
         for starts, out in ((("lra",), single), (("lra", "arx", "eiv"), three)):
-            result = run_set(name, directory=DAISY, download_missing=False, starts=starts)
+            if with_init:  # the paper's start, and ident's defaults
+                result = run_set(name, directory=DAISY, download_missing=False,
+                                 init="lra" if starts == ("lra",) else "auto")
+            else:
+                result = run_set(name, directory=DAISY, download_missing=False, starts=starts)
             out[name] = {mode: {"start": r.start, "M": h(r.misfit), "iter": r.iterations, "fit": h(r.fit),
                                 "p_ell_condition": h(r.p_ell_condition),
-                                "candidates": [[c.start, h(c.info.M) if c.info else c.error,
-                                                c.info.iter if c.info else None] for c in r.candidates]}
+                                "candidates": [[c.start, *candidate_numbers(c)] for c in r.candidates]}
                          for mode, r in result.modes.items()}
         print(name, {m: (single[name][m]["M"], single[name][m]["iter"]) for m in single[name]}, flush=True)
     return single, three
+
+
+def candidate_numbers(c):
+    """Misfit (or the error) and iterations of a runner's candidate, before and after issue 13."""
+    info = getattr(c, "info", c)
+    if getattr(c, "error", ""):
+        return [c.error, None]
+    return [h(info.M if hasattr(info, "M") else info.misfit), info.iter if hasattr(info, "iter") else info.iterations]
 
 
 def solver_alone():

@@ -206,8 +206,25 @@ CASES = [
      ValueError, 'variable 0 of w, an input .*is negligible.*as an unstable system'),
     ('all-zero data with an input', lambda: ident(np.zeros((50, 2)), 1, 1),
      ValueError, 'variable 0 of w, an input .*is zero in every sample'),
-    ('inputs that cannot be inputs', lambda: ident(noncausal_data(), 1, 1),
+    ('inputs that cannot be inputs', lambda: ident(noncausal_data(), 1, 1, init="lra"),
      ValueError, 'the identified model cannot take the first m = 1 variables of w as its inputs'),
+    # the starts: init names them, sys0 is the only start when given
+    ('unknown init', lambda: ident(W, 1, 1, init="n4sid"),
+     ValueError, "init: unknown start 'n4sid'; expected 'auto' or one or more of 'lra', 'arx', 'subspace'"),
+    ('unknown init in a sequence', lambda: ident(W, 1, 1, init=["lra", "pem"]),
+     ValueError, "init: unknown start 'pem'"),
+    ('empty init', lambda: ident(W, 1, 1, init=[]),
+     ValueError, "init is an empty sequence"),
+    ('auto inside a sequence', lambda: ident(W, 1, 1, init=["auto", "lra"]),
+     ValueError, "init: 'auto' stands alone"),
+    ('init of the wrong type', lambda: ident(W, 1, 1, init=3),
+     TypeError, "init must be 'auto', a start name or a sequence of them, got int"),
+    ('init with sys0', lambda: ident(W, 1, 1, init="arx", sys0=np.eye(2, 6)),
+     ValueError, "init='arx' and sys0 were both given: sys0 is the start, and the only one"),
+    ('init sequence with sys0', lambda: ident(W, 1, 1, init=("lra", "subspace"), sys0=np.eye(2, 6)),
+     ValueError, r"init=\('lra', 'subspace'\) and sys0 were both given"),
+    ('subspace start on data too short for it', lambda: ident(W[:12, :2], 1, 3, init="subspace"),
+     ValueError, "the data are too short for the subspace start"),
     # sizes are checked before anything of the problem's size is allocated
     ('ell 1e12 with zero initial conditions', lambda: ident(W, 1, 10**12, wini=0),
      ValueError, 'w is too short for the model class m = 1, ell = 1000000000000'),
@@ -379,6 +396,22 @@ def test_infeasible_starts_are_reported_in_the_callers_terms(monkeypatch) -> Non
 
 
 # --- warnings point at the caller's line ----------------------------------------------------------
+
+def test_a_nearly_noncausal_model_is_returned_with_warnings_at_the_callers_line() -> None:
+    # from the paper's start the kernel is singular (refused above); the other starts of "auto" creep
+    # towards it and stop where P_ell is nearly singular and the model violently unstable: ident says
+    # both, at the caller's line, and the candidates say why the paper's start gave nothing
+    from ident.identification import UnstableModelWarning
+    from ident.representations import IllConditionedWarning
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        _, info, _, _ = ident(noncausal_data(), 1, 1)
+    assert {type(r.message) for r in record} == {UnstableModelWarning, IllConditionedWarning}
+    assert any("no start led to a stable model" in str(r.message) for r in record)
+    assert all(r.filename == __file__ for r in record), [r.filename for r in record]
+    assert "cannot take the first m = 1 variables of w as its inputs" in info.candidates[0].error
+    assert info.start in ("arx", "subspace") and info.candidates[1].spectral_radius > 1e6
+
 
 def test_non_convergence_warning_points_at_the_callers_line() -> None:
     from ident.solver import SLRAWarning

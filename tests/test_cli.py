@@ -168,15 +168,25 @@ def test_lag_on_a_csv_file(data_csv, tmp_path, capsys):
     assert status == 0, err
     lines = out.splitlines()
     assert lines[1] == "lag | OE misfit | OE fit %" and len(lines) >= 5 and plot.stat().st_size > 1000
+    chosen = [line for line in lines if line.startswith("chosen lag (OE, hold-out rule on the identification data): ")]
+    assert len(chosen) == 1 and "by lag: 1: " in chosen[0], out
+    status, out, err = run(["lag", data_csv, "--inputs", "0:2", "--outputs", "y", "--lags", "0", "--modes", "oe",
+                            "--plot", plot], capsys)
+    assert status == 0 and "no lag chosen (OE): the hold-out rule chooses among positive lags" in out, err
 
 
 def test_daisy_and_lag_on_a_data_set(tmp_path, capsys):
     if not (SHARED / "erie.dat").is_file():
         pytest.skip(f"the DAISY files are not in {SHARED}")
     status, out, err = run(["daisy", "erie", "--data-dir", SHARED, "--no-download", "--out", tmp_path / "out",
-                            "--quiet", "--starts", "lra", "--maxiter", "30"], capsys)
+                            "--quiet", "--init", "lra", "--maxiter", "30"], capsys)
     assert status == 0, err
     assert "mean validation fit over 1 sets" in out and (tmp_path / "out" / "figure1.png").is_file()
+    results = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert results["settings"]["init"] == ["lra"]
+    assert [c["start"] for c in results["sets"][0]["modes"]["eiv"]["candidates"]] == ["lra"]
+    status, _, err = run(["daisy", "erie", "--out", tmp_path / "out2", "--init", "auto", "lra"], capsys)
+    assert status == 2 and "--init: 'auto' stands alone" in err
     status, out, err = run(["lag", "erie", "--data-dir", SHARED, "--lags", "1,2", "--modes", "eiv", "--maxiter", "20",
                             "--plot", tmp_path / "erie.png"], capsys)
     assert status == 0, err

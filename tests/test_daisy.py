@@ -44,6 +44,18 @@ def no_environment(monkeypatch, tmp_path):
 
 # --- the manifest ------------------------------------------------------------------------------------
 
+def test_best_peer_fits_equal_the_reference_file():
+    peers = SHARED.parent / "reference" / "peers.md"
+    if not peers.is_file():
+        pytest.skip(f"{peers} is not there")
+    best = {}
+    for line in peers.read_text(encoding="utf-8").splitlines():
+        cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+        if len(cells) > 3 and cells[0].isdigit():
+            best[cells[1]] = float(cells[-1])
+    assert best == daisy_runner.PEER_BEST_FIT
+
+
 def test_manifest_equals_the_toml_file(shared):
     tomllib = pytest.importorskip("tomllib")
     manifest = tomllib.loads((shared / "datasets.toml").read_text(encoding="utf-8"))
@@ -259,8 +271,12 @@ def test_runner_on_two_small_sets(shared, tmp_path):
     assert (erie.n_identification, erie.n_validation) == (40, 17)
     for mode in ("oe", "eiv"):
         assert robot_arm.modes[mode].fit > 90, mode
-        assert {c.start for c in robot_arm.modes[mode].candidates} >= {"lra", "arx"}
-    assert erie.modes["eiv"].misfit <= daisy_runner.REFERENCE_MISFIT["erie"] * (1 + 1e-6)
+        # ident's default starts, every one reported with the validation of its model
+        assert [c.start for c in robot_arm.modes[mode].candidates] == ["lra", "arx", "subspace"]
+        assert all(c.validation.mean_fit > 0 for c in robot_arm.modes[mode].candidates)
+    lra = erie.modes["eiv"].candidates[0]
+    assert lra.start == "lra" and lra.misfit <= daisy_runner.REFERENCE_MISFIT["erie"] * (1 + 1e-6)
+    assert erie.peer_fit == 38.1
     paths = daisy_report.write_results(results, tmp_path / "out")
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["figure1.png", "results.json", "run-log.json",
                                                                     "table.csv", "table.md"]
@@ -270,6 +286,20 @@ def test_runner_on_two_small_sets(shared, tmp_path):
     assert document["sets"][1]["modes"]["oe"]["fit"] > 90 and document["reference"]["mean_fit"]["oe"] == 35.2
     rows = list(csv.DictReader(paths["csv"].open()))
     assert [row["set"] for row in rows] == ["erie", "robot_arm"] and float(rows[1]["eiv_fit"]) > 90
+
+
+def test_results_read_back_give_the_same_files(shared, tmp_path):
+    # load_results is write_results read backwards: the files drawn again from results.json are the same
+    results = daisy_runner.run_benchmark(["erie", "robot_arm"], directory=shared, download_missing=False,
+                                         progress=None)
+    first = daisy_report.write_results(results, tmp_path / "a", settings={"init": "auto"})
+    loaded = daisy_report.load_results(first["json"])
+    assert [r.name for r in loaded] == ["erie", "robot_arm"]
+    assert loaded[1].modes["eiv"].candidates[2].start == "subspace"
+    assert loaded[1].modes["eiv"].candidates[2].fit == results[1].modes["eiv"].candidates[2].validation.mean_fit
+    again = daisy_report.write_results(loaded, tmp_path / "b", settings={"init": "auto"})
+    for key in ("markdown", "csv", "json", "figure"):
+        assert first[key].read_bytes() == again[key].read_bytes(), key
 
 
 def test_committed_results_hold_no_date_version_or_time_and_repeat_byte_for_byte(shared, tmp_path):
@@ -298,5 +328,16 @@ def test_runner_rejects_bad_choices(shared):
         daisy_runner.run_benchmark([], directory=shared, progress=None)
     with pytest.raises(ValueError, match="modes must be a non-empty selection of oe, eiv"):
         daisy_runner.run_set("erie", directory=shared, modes=["ml"])
-    with pytest.raises(ValueError, match="starts must"):
-        daisy_runner.run_set("erie", directory=shared, starts=[])
+    with pytest.raises(ValueError, match="init is an empty sequence"):
+        daisy_runner.run_set("erie", directory=shared, init=[])
+    with pytest.raises(ValueError, match="init: unknown start 'eiv'"):
+        daisy_runner.run_set("erie", directory=shared, init="eiv")
+
+
+def test_runner_with_the_papers_single_start(shared):
+    # init="lra": the paper's start alone; its misfit is the first candidate's of the default run
+    single = daisy_runner.run_set("robot_arm", directory=shared, download_missing=False, init="lra", modes=["eiv"])
+    default = daisy_runner.run_set("robot_arm", directory=shared, download_missing=False, modes=["eiv"])
+    assert [c.start for c in single.modes["eiv"].candidates] == ["lra"] and single.modes["eiv"].start == "lra"
+    assert single.modes["eiv"].misfit == pytest.approx(default.modes["eiv"].candidates[0].misfit, rel=1e-12)
+    assert single.modes["eiv"].misfit <= daisy_runner.REFERENCE_MISFIT["robot_arm"] * (1 + 1e-6)

@@ -64,7 +64,153 @@ def test_default_starts_in_order_and_reproducible():
     assert all(np.array_equal(a, b) for (_, a), (_, b) in zip(first, second))
 
 
-def test_unknown_start_is_named():
+def test_unknown_start_is_named():  # noqa: F811
     structure = Structure.time_major(2, 1, [10])
-    with pytest.raises(ValueError, match="unknown start 'subspace'"):
-        starts.start("subspace", np.zeros(structure.n_params), structure, 3)
+    with pytest.raises(ValueError, match="unknown start .ssa."):
+        starts.start("ssa", np.zeros(structure.n_params), structure, 3)
+
+
+# --- the subspace start ---------------------------------------------------------------------------------
+
+from ident.representations import kernel_to_ss, markov_parameters, normalize_kernel, random_system, simulate, \
+    ss_to_kernel  # noqa: E402
+
+
+def system_data(m, p, ell, n_samples, noise, seed):
+    rng = np.random.default_rng(seed)
+    system = random_system(m, p, ell, rng)
+    u = rng.standard_normal((n_samples, m))
+    y = simulate(system, u, rng.standard_normal(ell * p))
+    return system, np.hstack([u, y + noise * rng.standard_normal(y.shape)])
+
+
+def subspace_of(w, m, ell):
+    structure = Structure.time_major(w.shape[1], ell, [len(w) - ell])
+    p = structure.params_from_series([w])
+    return starts.subspace(p, structure, structure.n_rows - (w.shape[1] - m)), structure, p
+
+
+def dense_n4sid(w, m, ell, i):
+    """N4SID on the dense block-Hankel matrices, written from the textbook formulas (the reference)."""
+    q = w.shape[1]
+    p_out, n = q - m, ell * (q - m)
+    H = block_hankel(w, 2 * i)  # time-major rows: sample k of the window at rows k q .. k q + q - 1
+
+    def rows(lags, variables):
+        return H[[lag * q + v for lag in lags for v in variables]]
+
+    def oblique(past):
+        Uf, Wp, Yf = rows(range(past, 2 * i), range(m)), rows(range(past), range(q)), \
+            rows(range(past, 2 * i), range(m, q))
+        projector = np.eye(H.shape[1]) - (np.linalg.pinv(Uf) @ Uf if m else 0)  # onto the complement of U_f
+        return Yf @ projector @ Wp.T @ np.linalg.pinv(Wp @ projector @ Wp.T) @ Wp
+
+    U, s, Vt = np.linalg.svd(oblique(i), full_matrices=False)
+    gamma, X = U[:, :n] * np.sqrt(s[:n]), np.sqrt(s[:n])[:, None] * Vt[:n]
+    X_next = np.linalg.pinv(gamma[:-p_out]) @ oblique(i + 1)
+    theta = np.vstack([X_next, rows([i], range(m, q))]) @ np.linalg.pinv(np.vstack([X, rows([i], range(m))]))
+    return theta[:n, :n], theta[:n, n:], theta[n:, :n], theta[n:, n:]
+
+
+def test_subspace_recovers_an_exact_system_and_annihilates_its_data():
+    system, w = system_data(2, 2, 3, 400, 0.0, seed=5)
+    R, structure, p = subspace_of(w, 2, 3)
+    H = structure.hankel(p)
+    assert R.shape == (2, 16)
+    # the kernel of the exact model annihilates exact data to rounding (relative to R and H)
+    assert np.linalg.norm(R @ H) <= 1e-10 * np.linalg.norm(R) * np.linalg.norm(H)
+    model = kernel_to_ss(normalize_kernel(R, 2, 3), 2, 3)
+    assert np.allclose(markov_parameters(model, 10), markov_parameters(system, 10), atol=1e-8)
+
+
+def test_subspace_equals_a_dense_reference_on_noisy_data():
+    # the same algorithm on the dense matrices: equal to rounding, amplified by the conditioning
+    _, w = system_data(1, 2, 2, 300, 0.1, seed=6)
+    q, i = 3, 5
+    structure = Structure.time_major(q, 2, [len(w) - 2])
+    A, B, C, D = starts.subspace_model(structure.split(structure.params_from_series([w])), 1, 2, horizon=i)
+    A_ref, B_ref, C_ref, D_ref = dense_n4sid(w, 1, 2, i)
+    ours, reference = (markov_parameters(make(*abcd), 12) for abcd in ((A, B, C, D), (A_ref, B_ref, C_ref, D_ref)))
+    assert np.allclose(np.sort_complex(np.linalg.eigvals(A)), np.sort_complex(np.linalg.eigvals(A_ref)), atol=1e-8)
+    assert np.allclose(ours, reference, atol=1e-8 * np.abs(reference).max())
+
+
+def make(A, B, C, D):
+    from ident.representations import make_ss
+    return make_ss(A, B, C, D)
+
+
+def test_subspace_chunks_and_several_series_give_the_model_of_the_stacked_windows():
+    system, w = system_data(1, 1, 2, 260, 0.0, seed=7)
+    series = [w[:120], w[120:]]
+    structure = Structure.time_major(2, 2, [118, 138])
+    samples = structure.split(structure.params_from_series(series))
+    whole = starts.subspace_model(samples, 1, 2, horizon=4)
+    # the factor of the windows of both series, in small chunks, is the same factor (up to signs of rows)
+    rows = [(v, lag) for lag in range(8) for v in range(2)]
+    F = starts.window_triangular_factor(samples, rows, [113, 133], chunk=7)
+    M = np.hstack([block_hankel(s, 8) for s in series])
+    assert np.allclose(F.T @ F, M @ M.T, rtol=1e-12, atol=1e-12 * np.abs(M).max() ** 2)
+    # exact data: the windows never cross from one series to the next, so the model is exact
+    assert np.allclose(np.sort_complex(np.linalg.eigvals(whole[0])),
+                       np.sort_complex(np.linalg.eigvals(system.A)), atol=1e-8)
+
+
+def test_subspace_kernel_is_the_kernel_of_the_representations_chapter():
+    rng = np.random.default_rng(8)
+    system = random_system(2, 2, 2, rng)
+    structure = Structure.time_major(4, 2, [50])
+    ours = starts.model_kernel(*(np.asarray(x) for x in (system.A, system.B, system.C, system.D)), structure)
+    theirs = ss_to_kernel(system, 2)
+    # the same row space: each kernel's rows are combinations of the other's
+    assert np.linalg.matrix_rank(np.vstack([ours, theirs]), tol=1e-9) == 2
+
+
+def test_subspace_autonomous_and_static_models():
+    rng = np.random.default_rng(9)
+    system = random_system(0, 1, 2, rng)
+    y = simulate(system, np.zeros((200, 0)), np.array([1.0, -0.5]))
+    R, structure, p = subspace_of(y, 0, 2)
+    H = structure.hankel(p)
+    assert np.linalg.norm(R @ H) <= 1e-9 * np.linalg.norm(R) * np.linalg.norm(H)
+    _, w = system_data(2, 1, 1, 80, 0.1, seed=10)
+    static, structure0, p0 = subspace_of(w, 2, 0)
+    assert np.array_equal(static, starts.least_squares(p0, structure0, 2))
+
+
+def test_subspace_refuses_data_too_short_with_the_numbers():
+    _, w = system_data(1, 1, 3, 14, 0.1, seed=11)
+    with pytest.raises(ValueError, match="too short for the subspace start: windows of 8 samples"):
+        subspace_of(w, 1, 3)
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.1])
+def test_subspace_agrees_with_nfoursid(noise):
+    # an independent implementation (nfoursid, a test-only dependency) on the same data and horizon:
+    # on exact data the same model to rounding; on noisy data both estimate it, and they agree to a
+    # fraction of the estimation error (nfoursid reads the next states off one shifted state sequence)
+    import pandas as pd
+    from nfoursid.nfoursid import NFourSID
+
+    system, w = system_data(1, 2, 2, 2000, noise, seed=12)
+    i = 6
+    structure = Structure.time_major(3, 2, [len(w) - 2])
+    A, B, C, D = starts.subspace_model(structure.split(structure.params_from_series([w])), 1, 2, horizon=i)
+    frame = pd.DataFrame(w, columns=["u", "y1", "y2"])
+    peer = NFourSID(frame, output_columns=["y1", "y2"], input_columns=["u"], num_block_rows=i)
+    peer.subspace_identification()
+    model, _ = peer.system_identification(rank=4)
+    poles = np.sort_complex(np.linalg.eigvals(A))
+    peer_poles = np.sort_complex(np.linalg.eigvals(model.a))
+    true_poles = np.sort_complex(np.linalg.eigvals(system.A))
+    ours = markov_parameters(make(A, B, C, D), 8)
+    theirs = markov_parameters(make(model.a, model.b, model.c, model.d), 8)
+    truth = markov_parameters(system, 8)
+    if noise == 0:
+        assert np.allclose(poles, true_poles, atol=1e-8) and np.allclose(peer_poles, true_poles, atol=1e-6)
+        assert np.allclose(ours, theirs, atol=1e-6 * np.abs(truth).max())
+    else:
+        error = np.abs(ours - truth).max()
+        assert np.abs(poles - true_poles).max() < 0.05 and np.abs(peer_poles - poles).max() < 0.01
+        assert 0 < error < 0.02 * np.abs(truth).max()  # the noise shows, and both estimate the system
+        assert np.abs(ours - theirs).max() <= 0.5 * error  # closer to each other than to the truth

@@ -10,8 +10,8 @@ import pytest
 
 from ident import misfit
 from ident.representations import make_ss, p_ell_condition, random_system, simulate
-from ident.validation import (LagCurve, fit_percent, misfit_vs_lag, plot_lag_curves, spectral_radius,
-                              split_for_validation, validate)
+from ident.validation import (LagChoice, LagCurve, choose_lag, fit_percent, misfit_vs_lag, plot_lag_curves,
+                              spectral_radius, split_for_validation, validate)
 
 matplotlib.use("Agg")
 
@@ -108,6 +108,69 @@ def test_misfit_against_the_lag():
     assert np.isnan(curve.misfit[3]) and "lag 60" in curve.messages[3] and "samples" in curve.messages[3]
     with pytest.raises(ValueError, match="lags must be"):
         misfit_vs_lag(w, 1, [])
+
+
+def lag2_data(n_samples=200, seed=7):
+    rng = np.random.default_rng(seed)
+    system = random_system(1, 1, 2, rng)
+    u = rng.standard_normal((n_samples, 1))
+    return np.hstack([u, simulate(system, u, rng.standard_normal(2))]) + 1e-2 * rng.standard_normal((n_samples, 2))
+
+
+def test_choose_lag_finds_the_lag_of_the_system_and_shows_its_evidence(tmp_path):
+    w = lag2_data()
+    choice = choose_lag(w, 1, [3, 1, 2, 2], exct=[0])
+    assert isinstance(choice, LagChoice) and choice.lags == [1, 2, 3]  # sorted, without repeats
+    assert choice.n_estimation == 140 and choice.n_holdout == 60 and choice.holdout == 0.3
+    # a lag-1 model misses the lag-2 system's weaker mode; the noise is 1 % of the signal
+    assert choice.holdout_fits[1] > 90 and choice.holdout_fits[0] < choice.holdout_fits[1] - 1
+    best = np.nanmax(choice.holdout_fits)  # the smallest lag within a point of the best fit
+    assert choice.ell == min(lag for lag, fit in zip(choice.lags, choice.holdout_fits) if fit >= best - 1)
+    assert choice.ell == 2
+    assert choice.misfits[1] < 0.2 * choice.misfits[0]  # the weaker mode: a tenth of the misfit here
+    assert "held-out" in choice.rule
+    figure = choice.plot(tmp_path / "choice.png")
+    assert (tmp_path / "choice.png").stat().st_size > 1000
+    assert any("chosen lag (ell = " in text.get_text() for text in figure.axes[0].get_legend().get_texts())
+
+
+def test_choose_lag_through_an_executor_gives_the_same_choice():
+    from concurrent.futures import ThreadPoolExecutor
+    w = lag2_data()
+    here = choose_lag(w, 1, range(1, 4), exct=[0])
+    with ThreadPoolExecutor(2) as pool:
+        there = choose_lag(w, 1, range(1, 4), exct=[0], executor=pool)
+    assert there.ell == here.ell
+    assert np.allclose(there.misfits, here.misfits, rtol=1e-9) and np.allclose(there.holdout_fits, here.holdout_fits)
+
+
+@pytest.mark.parametrize("lags, error, match", [
+    ([], ValueError, "lags must be a non-empty sequence of positive integers"),
+    ([0, 1], ValueError, "lags must be .*0 is not one"),
+    ([1, 2.5], ValueError, "lags must be .*2.5 is not one"),
+    ([True], ValueError, "lags must be"),
+    ("1-3", TypeError, "lags must be a sequence of positive integers"),
+    (3, TypeError, "lags must be a sequence of positive integers"),
+    ([1, 60], ValueError, "lags: lag 60 is too long for the data"),
+])
+def test_choose_lag_refuses_bad_lags(lags, error, match):
+    with pytest.raises(error, match=match):
+        choose_lag(lag2_data(), 1, lags)
+
+
+@pytest.mark.parametrize("holdout", [0, 1, -0.1, 1.5, "0.3", True, float("nan")])
+def test_choose_lag_refuses_a_bad_holdout(holdout):
+    with pytest.raises(ValueError, match="holdout must be a fraction in \\(0, 1\\)"):
+        choose_lag(lag2_data(), 1, [1, 2], holdout=holdout)
+
+
+def test_choose_lag_refuses_bad_data_and_m():
+    with pytest.raises(TypeError, match="w must be one series"):
+        choose_lag([lag2_data(), lag2_data()], 1, [1, 2])
+    with pytest.raises(ValueError, match="m must satisfy"):
+        choose_lag(lag2_data(), 2, [1, 2])
+    with pytest.raises(ValueError, match="too short for the hold-out rule"):
+        choose_lag(lag2_data(40), 1, [1, 2, 3], holdout=0.05)
 
 
 def test_the_lag_plot_is_labelled(tmp_path):
