@@ -17,7 +17,9 @@ Cases:
     daisy:SET       one set of it
     peak            the matrix product alone
 
-Usage: python benchmarks/side_by_side.py OLD_ROOT [NEW_ROOT] [--rounds=3] CASE ...
+Usage: python benchmarks/side_by_side.py OLD_ROOT [NEW_ROOT] [--rounds=3] [--json=FILE] CASE ...
+--json=FILE also writes the best of the rounds per measure, the ratios, every round and the load
+averages to FILE (merged into it case by case, so that cases measured in separate runs share a file).
 (NEW_ROOT defaults to this checkout; e.g. OLD_ROOT = a `git worktree add /work/perf-base 4e3dfb5`.)
 """
 import json
@@ -251,7 +253,9 @@ def main(argv):
     new = Path(roots[1]).resolve() if len(roots) > 1 else HERE.parent
     rounds = int(options.get("rounds", 3))
     print(f"old {old}\nnew {new}\nload average at start {os.getloadavg()}", flush=True)
+    record = {}
     for case in cases:
+        load_before = os.getloadavg()[0]
         runs = {"old": [], "new": []}
         for k in range(rounds):
             order = [("old", old), ("new", new)] if k % 2 == 0 else [("new", new), ("old", old)]
@@ -271,6 +275,31 @@ def main(argv):
             b = min(r.get(name, float("nan")) for r in runs["new"])
             print(f"    {name:22s} old {a:12.5g}  new {b:12.5g}  new/old {b / a if a else float('nan'):7.3f}")
         print(flush=True)
+        record[case] = _summary(runs, rounds, peak, load_before)
+    if options.get("json"):
+        _write_json(Path(options["json"]), record, old, new)
+
+
+def _summary(runs, rounds, peak, load_before):
+    """The best of the rounds per numeric measure and version, the ratios new / old, every round."""
+    best = {label: {name: min(r[name] for r in runs[label] if name in r)
+                    for name, value in runs[label][0].items() if isinstance(value, (int, float))}
+            for label in runs}
+    ratio = {name: best["new"][name] / best["old"][name] for name in best["old"]
+             if name in best["new"] and best["old"][name]}
+    return {"rounds": rounds, "best": best, "new_over_old": ratio, "machine_peak_gflops": peak,
+            "load_average_before": load_before, "load_average_after": os.getloadavg()[0], "runs": runs}
+
+
+def _write_json(path, record, old, new):
+    """Merge this run's cases into the JSON file (cases of earlier runs kept)."""
+    import subprocess as sp
+    data = json.loads(path.read_text()) if path.exists() else {}
+    commits = {label: sp.run(["git", "-C", str(root), "rev-parse", "--short", "HEAD"], capture_output=True,
+                             text=True).stdout.strip() for label, root in (("old", old), ("new", new))}
+    for case, summary in record.items():
+        data[case] = dict(summary, commits=commits, date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()))
+    path.write_text(json.dumps(data, indent=1, sort_keys=True) + "\n")
 
 
 if __name__ == "__main__":
