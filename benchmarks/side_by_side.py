@@ -198,7 +198,10 @@ def case_daisy(names=None):
     out = {"seconds": 0.0, "iterations": 0, "sets": {}}
     for name in names:
         started = time.perf_counter()
-        result = run_set(name, directory=DAISY, download_missing=False, modes=("eiv",), starts=("lra",))
+        try:  # the paper's single start: starts=("lra",) before ident's init option, init="lra" since
+            result = run_set(name, directory=DAISY, download_missing=False, modes=("eiv",), init="lra")
+        except TypeError:
+            result = run_set(name, directory=DAISY, download_missing=False, modes=("eiv",), starts=("lra",))
         wall = time.perf_counter() - started
         mode = result.modes["eiv"]
         candidate = mode.candidates[0]
