@@ -9,7 +9,9 @@ round, and the flop rates of the cases that count their flops are given against 
 Cases:
     scale:T         one series of T samples (benchmarks/bench_scaling.py's 2 x 2 system, lag 2): seconds
                     per iteration (solver time / iterations), per Gauss-Newton matrix and per cost
-                    evaluation at the solution (best of 3 in the process), tracemalloc peak (scale:T:mem)
+                    evaluation at the solution (best of 3 in the process), tracemalloc peak of a run with
+                    maxiter 2 and the process's resident peak (scale:T:mem; tracemalloc counts allocated
+                    pages never touched, such as the band past a factored prefix)
     split:NxK       the same system, N series of K samples each (N K samples in all), per iteration
     short:NxK       N series of K samples of a SISO lag-1 system through ident (issue 16's 3000 x 3), maxiter 20
     daisy           DAISY Table 1, errors-in-variables, the paper's single start (ident.daisy_runner.run_set,
@@ -139,6 +141,9 @@ def case_scale(n_samples, memory=False):
             slra(p, structure, 10, maxiter=2)
         out["tracemalloc_peak_gb"] = tracemalloc.get_traced_memory()[1] / 1e9
         tracemalloc.stop()
+        import resource  # the process's resident peak (data generation and the runs above included):
+        out["resident_peak_gb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6  # untouched pages not counted
+
     return out
 
 
