@@ -227,14 +227,14 @@ class CholeskyFactor:
         return s
 
     # <<Cholesky factor: solves>>= literate/11-solver-cholesky.md:327
-    def solve(self, rhs, trans: str = "N") -> np.ndarray:
+    def solve(self, rhs, trans: str = "N", overwrite: bool = False) -> np.ndarray:
         """Solve L x = rhs (trans="N") or L^T x = rhs (trans="T") for rhs (gK,) or (gK, N) (one column
-        per series; Fortran order saves a copy): block-wise on the rows where L is exactly stationary,
-        by LAPACK on the others."""
+        per series; Fortran order saves a copy, and with overwrite such an rhs holds the solution):
+        block-wise on the rows where L is exactly stationary, by LAPACK on the others."""
         part = self.part
         if part is None:
-            return banded_solve(self.band, rhs, trans)
-        x = np.array(rhs, dtype=float, order="F")
+            return banded_solve(self.band, rhs, trans, overwrite)
+        x = np.array(rhs, dtype=float, order="F", copy=None if overwrite else True)
         columns = x.reshape((len(x), -1), order="F")  # a view, (gK, N)
         n_rhs, u = columns.shape[1], self.band.shape[0] - 1
         begin = part.stop - part.n_blocks() * part.nb  # the blocked rows: begin .. part.stop - 1
