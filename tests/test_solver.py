@@ -576,6 +576,30 @@ def test_factor_through_a_stationary_prefix_matches_the_full_factorisation():
     assert unshortened.cost == pytest.approx(cost, rel=1e-12)
 
 
+def test_an_ill_conditioned_factor_is_stationary_to_its_rounding_level():
+    # two nearly dependent kernel rows: the factor's rows scatter around the stationary one by about
+    # kappa eps, above the setting's tolerance; taken as stationary at that level, the cost and the
+    # Gauss-Newton matrix agree with those of the factor computed in full to a few hundred kappa eps
+    rng = np.random.default_rng(7)
+    n_samples, q = 6000, 8
+    structure = Structure.time_major(q, 1, [n_samples - 1])
+    p = structure.params_from_series([rng.standard_normal((n_samples, q))])
+    R = rng.standard_normal((4, 2 * q))
+    R[3] = R[2] + 0.01 * rng.standard_normal(2 * q)
+    shortcut_state = Problem(p, structure).evaluate(R)
+    full_state = Problem(p, structure, shortcut=Shortcut(enabled=False)).evaluate(R)
+    (factor,) = shortcut_state.factors
+    diagonal = full_state.factors[0].band[0]
+    kappa = (diagonal.max() / diagonal.min()) ** 2
+    assert kappa > 1e3 and factor.prefix_stationary_from is not None
+    bound = 300 * kappa * np.finfo(float).eps
+    assert shortcut_state.cost == pytest.approx(full_state.cost, rel=bound)
+    free = Chart.from_kernel(R).free_columns
+    for shortcut_part, full_part in zip(Problem(p, structure).normal_equations(shortcut_state, free),
+                                        Problem(p, structure).normal_equations(full_state, free)):
+        assert np.abs(shortcut_part - full_part).max() <= bound * np.abs(full_part).max()
+
+
 def test_a_stationary_series_is_filled_in_only_where_read():
     # the factor leaves the band past the prefix unfilled; every consumer fills what it reads. Poison
     # that part of the band with NaN: the results must still be those of the fully filled factor.
