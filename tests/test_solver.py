@@ -466,6 +466,32 @@ def test_delayed_bases_agree_with_all_right_hand_sides(monkeypatch):
         assert np.abs(a - b).max() < 1e-11 * np.abs(b).max()
 
 
+@pytest.mark.parametrize("ell, n_series, n_samples", [(3, 1, 3000), (3, 3, 1000)])
+def test_free_responses_complete_the_delayed_bases(monkeypatch, ell, n_series, n_samples):
+    # the solver switches to the delayed bases as soon as the factor is stationary over the delays, while
+    # the solutions still differ from their delayed bases by a free response of the recursion; here that
+    # difference is 1e-10 of the Gram matrix (the delayed bases alone are off by that), the free responses
+    # make it exact. A group of several series is one batch with a free response per series.
+    rng = np.random.default_rng(11)
+    series = [simulate(rng, 2, 2, 2 * ell, n_samples) for _ in range(n_series)]
+    structure = Structure.time_major(4, ell, [n_samples - ell] * n_series)
+    p = structure.params_from_series(series)
+    R = initial_kernel(p, structure, 4 * ell + 2)
+    R = R + 0.3 * rng.standard_normal(R.shape)
+    free = Chart.from_kernel(R).free_columns
+    differences = []
+    original = gauss_newton._FreeResponses.add_to
+    monkeypatch.setattr(gauss_newton._FreeResponses, "add_to",
+                        lambda self, *a: differences.append(np.abs(self.differences).max()) or original(self, *a))
+    problem = Problem(p, structure)
+    delayed = problem.normal_equations(problem.evaluate(R), free)
+    assert differences and max(differences) > 1e-8, "no switch before the free responses decayed"
+    full = Problem(p, structure, shortcut=Shortcut(enabled=False))
+    solved = full.normal_equations(full.evaluate(R), free)
+    for a, b in zip(delayed, solved):
+        assert np.abs(a - b).max() < 1e-12 * np.abs(b).max()
+
+
 def test_delayed_products_match_direct_sums():
     rng = np.random.default_rng(8)
     n_base, n_eqs, max_delay = 3, 2, 3
