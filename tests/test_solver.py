@@ -680,6 +680,22 @@ def test_blas_runs_on_one_thread_inside_the_solver_and_the_callers_setting_retur
     assert blas_threads() == before
 
 
+def test_no_huge_page_advice_inside_the_solver_and_the_callers_setting_returns():
+    from ident.solver.threads import _SET_HUGEPAGE, one_blas_thread
+
+    if _SET_HUGEPAGE is None:
+        pytest.skip("this numpy has no switch for its huge-page advice")
+    original = _SET_HUGEPAGE(True)
+    try:
+        for callers in (True, False):
+            _SET_HUGEPAGE(callers)
+            with one_blas_thread():
+                assert _SET_HUGEPAGE(False) is False  # the switch returns the setting it replaces
+            assert _SET_HUGEPAGE(callers) is callers
+    finally:
+        _SET_HUGEPAGE(original)
+
+
 def run_in_order(steps):
     """Run (thread, action) steps in the given order, each in its thread (a thread ends after its last)."""
     import threading
