@@ -418,8 +418,8 @@ def projection_uvu(data: _GroupData, free_variable, free_lag, chunk: int = 65536
     n_free = len(free_variable)
     uvu = np.zeros((n_free, n_eqs, n_free, n_eqs))
     max_lag = int(free_lag.max()) if n_free else 0
-    correlation = [np.tensordot(y[:, : n_cols - k], y[:, k:], axes=([0, 1], [0, 1])) if k < n_cols
-                   else np.zeros((n_eqs, n_eqs)) for k in range(max_lag + 1)]  # C(k), k >= 0
+    flat = y_rows.reshape(n_eqs, -1)  # the series end to end, 2 pad > max_lag zeros apart: no products across
+    correlation = [flat[:, : flat.shape[1] - k] @ flat[:, k:].T for k in range(max_lag + 1)]  # C(k), k >= 0
     for v in np.unique(free_variable):
         columns = np.flatnonzero(free_variable == v)
         weight = data.group.constant[v]
