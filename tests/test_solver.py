@@ -818,3 +818,28 @@ def test_exact_data_stop_at_the_rounding_level():
     problem = Problem(p, structure)
     state = problem.evaluate(initial_kernel(p, structure, 7))
     assert 0 < problem.rounding_level(state) < 1e-20 * state.cost
+
+
+@pytest.mark.parametrize("n_eqs, n_block_diagonals, n_blocks", [(2, 2, 1000), (3, 1, 217), (1, 3, 50)])
+def test_many_columns_are_solved_block_wise_as_lapack_solves_them(n_eqs, n_block_diagonals, n_blocks):
+    # a factor of a block-banded Gamma computed in full (no stationary part), with a column per series
+    # of a group of many: block-wise (the last rows, not a whole block, by LAPACK), both L and L^T
+    from ident.solver.blocked import VARYING_MIN_COLUMNS, solve_many
+
+    rng = np.random.default_rng(3)
+    g, s = n_eqs, n_block_diagonals
+    n, u = g * n_blocks, (s + 1) * g - 1
+    gamma = np.zeros((n, n))
+    for t in range(n_blocks):
+        for k in range(min(s + 1, n_blocks - t)):
+            gamma[(t + k) * g: (t + k + 1) * g, t * g: (t + 1) * g] = 0.3 * rng.standard_normal((g, g))
+    gamma = np.tril(gamma) + np.tril(gamma, -1).T
+    gamma += (np.abs(gamma).sum(axis=1).max() + 1) * np.eye(n)  # diagonally dominant: positive definite
+    band = np.zeros((u + 1, n), order="F")
+    for d in range(u + 1):
+        band[d, : n - d] = np.diag(gamma, -d)
+    factor = factor_band(band)
+    rhs = rng.standard_normal((n, VARYING_MIN_COLUMNS + 4))
+    for trans in "NT":
+        expected = banded_solve(factor, np.asfortranarray(rhs), trans)
+        assert np.abs(solve_many(factor, rhs, trans, g) - expected).max() < 1e-13 * np.abs(expected).max()

@@ -75,7 +75,7 @@ class Problem:
         for group, factor in zip(self.groups, factors):
             r = residual(group, blocks)  # (N, K, g)
             eps = factor.solve(r.reshape(group.n_series, -1).T)  # one column per series, Fortran order
-            whitened_cost += float(eps.T.ravel() @ eps.T.ravel())
+            whitened_cost += float(eps.ravel(order="K") @ eps.ravel(order="K"))  # a view in either order
             y = np.ascontiguousarray(factor.solve(eps, "T", overwrite=True).T).reshape(r.shape)  # eps's memory
             ys.append(y)
             r_y += float(r.ravel() @ y.ravel())
