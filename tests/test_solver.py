@@ -466,6 +466,32 @@ def test_delayed_bases_agree_with_all_right_hand_sides(monkeypatch):
         assert np.abs(a - b).max() < 1e-11 * np.abs(b).max()
 
 
+def test_delayed_products_of_a_batch_in_the_solvers_layout(monkeypatch):
+    # many series of one length share their factor and are solved a batch at a time; once their free
+    # responses have decayed, the delayed products are taken in the solver's layout (the series end to
+    # end, less the products across their ends, and the rows at either end per series): the same
+    # matrices as with every right-hand side solved over every row (the shortcut off).
+    rng = np.random.default_rng(5)
+    n_series, n_samples = 40, 600
+    w = simulate(rng, 2, 2, 4, n_series * n_samples)
+    series = [w[k * n_samples: (k + 1) * n_samples] + 0.1 * rng.standard_normal((n_samples, 4))
+              for k in range(n_series)]
+    structure = Structure.time_major(4, 2, [n_samples - 2] * n_series)
+    p = structure.params_from_series(series)
+    R = initial_kernel(p, structure, 10)
+    free = Chart.from_kernel(R).free_columns
+    calls = []
+    original = gauss_newton.delayed_products_by_series
+    monkeypatch.setattr(gauss_newton, "delayed_products_by_series", lambda *a: calls.append(1) or original(*a))
+    problem = Problem(p, structure)
+    by_series = problem.normal_equations(problem.evaluate(R), free)
+    assert calls, "the batch's delayed products were not taken in the solver's layout"
+    full = Problem(p, structure, shortcut=Shortcut(enabled=False))
+    solved = full.normal_equations(full.evaluate(R), free)
+    for a, b in zip(by_series, solved):
+        assert np.abs(a - b).max() < 1e-11 * np.abs(b).max()
+
+
 @pytest.mark.parametrize("ell, n_series, n_samples", [(3, 1, 3000), (3, 3, 1000)])
 def test_free_responses_complete_the_delayed_bases(monkeypatch, ell, n_series, n_samples):
     # the solver switches to the delayed bases as soon as the factor is stationary over the delays, while
