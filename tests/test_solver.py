@@ -492,6 +492,35 @@ def test_delayed_products_of_a_batch_in_the_solvers_layout(monkeypatch):
         assert np.abs(a - b).max() < 1e-11 * np.abs(b).max()
 
 
+@pytest.mark.parametrize("n_series, n_samples", [(1, 3000), (6, 1500)])
+def test_bases_of_whole_stationary_blocks_made_from_their_sources(monkeypatch, n_series, n_samples):
+    # past the switch, a chunk of whole stationary blocks starts its blocked solve from T^-1 b_k made
+    # from the bases' sources (p_hat_v, windows of y_a) instead of from the right-hand sides: the same
+    # matrices as every right-hand side solved over every row. Unequal depths, constant weights other
+    # than one and an exact variable (an h-base without a c-base), one series and a batch of series.
+    from ident.solver import inverted_bases
+    rng = np.random.default_rng(12)
+    shape = Structure((3, 2, 3), (n_samples,) * n_series, perm=tuple(rng.permutation(8)))
+    weights = np.concatenate([np.full(shape.n_samples(j, i), weight) for j in range(n_series)
+                              for i, weight in enumerate((2.0, np.inf, 0.5))])
+    structure = Structure(shape.depths, shape.n_cols, shape.perm, weights)
+    series = [simulate(rng, 1, 2, 2, n_samples + 2) + 0.1 * rng.standard_normal((n_samples + 2, 3))
+              for _ in range(n_series)]  # a system, so that the factor becomes stationary
+    p = np.concatenate([w[: structure.n_samples(j, i), i] for j, w in enumerate(series) for i in range(3)])
+    R = initial_kernel(p, structure, 6)
+    free = Chart.from_kernel(R).free_columns
+    calls = []
+    original = inverted_bases.InvertedBases.blocks
+    monkeypatch.setattr(inverted_bases.InvertedBases, "blocks", lambda *a: calls.append(1) or original(*a))
+    problem = Problem(p, structure, chunk_elements=1 << 12)  # delayed chunks of 256 columns: several whole ones
+    from_sources = problem.normal_equations(problem.evaluate(R), free)
+    assert calls, "no chunk of whole stationary blocks was made from the bases' sources"
+    full = Problem(p, structure, shortcut=Shortcut(enabled=False))
+    solved = full.normal_equations(full.evaluate(R), free)
+    for a, b in zip(from_sources, solved):
+        assert np.abs(a - b).max() < 1e-11 * np.abs(b).max()
+
+
 @pytest.mark.parametrize("ell, n_series, n_samples", [(3, 1, 3000), (3, 3, 1000)])
 def test_free_responses_complete_the_delayed_bases(monkeypatch, ell, n_series, n_samples):
     # the solver switches to the delayed bases as soon as the factor is stationary over the delays, while
