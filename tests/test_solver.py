@@ -181,6 +181,56 @@ def test_gamma_band_matches_dense_gamma(make):
             assert np.abs(np.tril(block, -band.shape[0])).max() == 0.0
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_symbol_bounds_the_smallest_eigenvalue_of_gamma(seed):
+    # a block-Toeplitz Gamma (weights constant in time, unequal depths, an exact variable): the bound from
+    # its symbol is below the smallest eigenvalue of every finite section, and for a long one not below
+    # half of it (a useful bound); a group whose weights vary in time has none
+    from ident.solver.gamma import smallest_eigenvalue_bound
+    rng = np.random.default_rng(seed)
+    for n_cols in (5, 40, 300):
+        shape = Structure((3, 2, 3), (n_cols,), perm=tuple(rng.permutation(8)))
+        weights = np.concatenate([np.full(shape.n_samples(0, i), w) for i, w in enumerate((0.5, np.inf, 2.0))])
+        structure = Structure(shape.depths, shape.n_cols, shape.perm, weights)
+        R = rng.standard_normal((2, structure.n_rows))  # g = 2: the symbol R V R^H is regular with two noisy variables
+        layout = SeriesGroups(structure)
+        group = layout.groups(layout.grouped(np.zeros(structure.n_params)))[0]
+        blocks = kernel_blocks(R, structure)
+        band = gamma_band(blocks, group)
+        dense = np.zeros((band.shape[1], band.shape[1]))
+        for diagonal in range(band.shape[0]):
+            dense += np.diag(band[diagonal, : band.shape[1] - diagonal], -diagonal)
+        smallest = np.linalg.eigvalsh(dense + np.tril(dense, -1).T)[0]
+        bound = smallest_eigenvalue_bound(blocks, group)
+        assert 0 < bound <= smallest
+        if n_cols == 300:  # a long section is near the symbol's minimum, of which the grid misses at most half
+            assert bound > 0.4 * smallest
+    structure, rng = general_structure(seed)  # random weights that vary in time
+    layout = SeriesGroups(structure)
+    for group in layout.groups(layout.grouped(np.zeros(structure.n_params))):
+        assert smallest_eigenvalue_bound(kernel_blocks(rng.standard_normal((3, 8)), structure), group) == -np.inf
+
+
+def test_rounding_level_bound_settles_the_question_without_a_solve(monkeypatch):
+    # on noisy data the rounding level's bound (no residual, no solve) is below the cost and above the
+    # level itself; on exact data it is not below the cost, and the level is computed
+    rng = np.random.default_rng(0)
+    structure = Structure.time_major(3, 2, [998])
+    w = simulate(rng, 1, 2, 2, 1000)
+    for noise in (0.1, 0.0):
+        p = structure.params_from_series([w + noise * rng.standard_normal(w.shape)])
+        problem = Problem(p, structure)
+        state = problem.evaluate(initial_kernel(p, structure, 7))
+        returned = problem.rounding_level(state)
+        with monkeypatch.context() as patch:
+            patch.setattr(Problem, "_rounding_level_bound", lambda *a: np.inf)
+            level = problem.rounding_level(state)
+        if noise:
+            assert level <= returned < state.cost and returned != level
+        else:
+            assert returned == level
+
+
 def test_series_of_equal_length_and_weights_form_groups():
     structure, _ = grouped_structure()
     layout = SeriesGroups(structure)
