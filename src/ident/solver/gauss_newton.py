@@ -167,7 +167,7 @@ def _solve_batch(solver, data: _GroupData, series: slice, bases: _Bases, structu
         stop = min(n_cols, start + (base_chunk if delayed else transient))
         if not delayed and bases.may_delay and start < switch_row < stop:
             stop = switch_row  # a chunk ends there
-        elif delayed and stop < n_cols:  # on a boundary of the solver's blocks: none solved apart
+        elif delayed:  # on a boundary of the solver's blocks (the rows after the last one: a short chunk)
             stop = solver.block_end(stop * n_eqs) // n_eqs
         n = stop - start
         n_free = free.n_columns if delayed and free.active else 0
