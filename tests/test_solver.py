@@ -530,17 +530,20 @@ def test_delayed_products_of_a_batch_in_the_solvers_layout(monkeypatch):
               for k in range(n_series)]
     structure = Structure.time_major(4, 2, [n_samples - 2] * n_series)
     p = structure.params_from_series(series)
-    R = initial_kernel(p, structure, 10)
-    free = Chart.from_kernel(R).free_columns
     calls = []
     original = gauss_newton.delayed_products_by_series
     monkeypatch.setattr(gauss_newton, "delayed_products_by_series", lambda *a: calls.append(1) or original(*a))
-    problem = Problem(p, structure)
-    by_series = problem.normal_equations(problem.evaluate(R), free)
+    assert_gauss_newton_as_solved_in_full(p, structure, initial_kernel(p, structure, 10))
     assert calls, "the batch's delayed products were not taken in the solver's layout"
+
+
+def assert_gauss_newton_as_solved_in_full(p, structure, R, **options):
+    """The Gauss-Newton matrices of Problem(p, structure, **options) at R equal, to 1e-11 of their largest
+    entries, those with every right-hand side solved over every row (the shortcut off)."""
+    free = Chart.from_kernel(R).free_columns
+    problem = Problem(p, structure, **options)
     full = Problem(p, structure, shortcut=Shortcut(enabled=False))
-    solved = full.normal_equations(full.evaluate(R), free)
-    for a, b in zip(by_series, solved):
+    for a, b in zip(problem.normal_equations(problem.evaluate(R), free), full.normal_equations(full.evaluate(R), free)):
         assert np.abs(a - b).max() < 1e-11 * np.abs(b).max()
 
 
@@ -559,18 +562,12 @@ def test_bases_of_whole_stationary_blocks_made_from_their_sources(monkeypatch, n
     series = [simulate(rng, 1, 2, 2, n_samples + 2) + 0.1 * rng.standard_normal((n_samples + 2, 3))
               for _ in range(n_series)]  # a system, so that the factor becomes stationary
     p = np.concatenate([w[: structure.n_samples(j, i), i] for j, w in enumerate(series) for i in range(3)])
-    R = initial_kernel(p, structure, 6)
-    free = Chart.from_kernel(R).free_columns
     calls = []
     original = inverted_bases.InvertedBases.blocks
     monkeypatch.setattr(inverted_bases.InvertedBases, "blocks", lambda *a: calls.append(1) or original(*a))
-    problem = Problem(p, structure, chunk_elements=1 << 12)  # delayed chunks of 256 columns: several whole ones
-    from_sources = problem.normal_equations(problem.evaluate(R), free)
+    assert_gauss_newton_as_solved_in_full(p, structure, initial_kernel(p, structure, 6),
+                                          chunk_elements=1 << 12)  # delayed chunks of 256 columns: several whole
     assert calls, "no chunk of whole stationary blocks was made from the bases' sources"
-    full = Problem(p, structure, shortcut=Shortcut(enabled=False))
-    solved = full.normal_equations(full.evaluate(R), free)
-    for a, b in zip(from_sources, solved):
-        assert np.abs(a - b).max() < 1e-11 * np.abs(b).max()
 
 
 @pytest.mark.parametrize("ell, n_series, n_samples", [(3, 1, 3000), (3, 3, 1000)])
