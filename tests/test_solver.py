@@ -570,6 +570,22 @@ def test_bases_of_whole_stationary_blocks_made_from_their_sources(monkeypatch, n
     assert calls, "no chunk of whole stationary blocks was made from the bases' sources"
 
 
+def test_bases_from_their_sources_when_the_weighted_variables_have_depth_one(monkeypatch):
+    # the c-bases' maps need no samples after a block when every weighted variable has depth 1 (the
+    # deeper one is exact): the bases from their sources still give the matrices of the full solve
+    from ident.solver import inverted_bases
+    rng = np.random.default_rng(3)
+    shape = Structure((1, 1, 3), (3000,), perm=tuple(range(5)))
+    weights = np.concatenate([np.full(shape.n_samples(0, i), w) for i, w in enumerate((1.0, 2.0, np.inf))])
+    structure = Structure(shape.depths, shape.n_cols, shape.perm, weights)
+    p = rng.standard_normal(structure.n_params)
+    depths = []
+    original = inverted_bases.InvertedBases.blocks
+    monkeypatch.setattr(inverted_bases.InvertedBases, "blocks", lambda self, *a: depths.append(self.depth) or original(self, *a))
+    assert_gauss_newton_as_solved_in_full(p, structure, initial_kernel(p, structure, 3), chunk_elements=1 << 12)
+    assert depths and set(depths) == {1}
+
+
 @pytest.mark.parametrize("ell, n_series, n_samples", [(3, 1, 3000), (3, 3, 1000)])
 def test_free_responses_complete_the_delayed_bases(monkeypatch, ell, n_series, n_samples):
     # the solver switches to the delayed bases as soon as the factor is stationary over the delays, while
