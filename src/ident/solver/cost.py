@@ -110,7 +110,7 @@ class Problem:
         n_terms = self.structure.n_rows
         unit_roundoff = np.finfo(float).eps / 2
         gamma = n_terms * unit_roundoff / (1 - n_terms * unit_roundoff)
-        if self.p.size >= ROUNDING_BOUND_MIN_SAMPLES:
+        if self.p.size >= ROUNDING_BOUND_MIN_SAMPLES and state.cost > 0:  # (a zero cost is below any bound)
             bound = self._rounding_level_bound(state, gamma)
             if bound < state.cost:
                 return bound
