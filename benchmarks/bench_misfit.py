@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ident import misfit
-from ident.examples import shared_path
+from ident.examples import reference_path
 from ident.representations import make_ss, random_system, simulate
 
 
@@ -58,7 +58,7 @@ def main() -> None:
     seconds = best_of(lambda: misfit(w, model), 1)
     rows.append({"T": 10**5, "setting": "10 % missing", "seconds": seconds})
     print(f"T = {10**5:>8d}  {'10 % missing':20s} {seconds:7.3f} s  {1e6 * seconds / 10**5:6.2f} us/sample")
-    results = shared_path("reference", "msd_results.json")
+    results = reference_path("msd_results.json")
     if results:
         chain = make_ss(*(np.array(json.loads(results.read_text())["ident"][k]) for k in "ABCD"))
         w = noisy_data(chain, 10**4, rng)

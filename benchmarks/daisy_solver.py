@@ -24,7 +24,7 @@ DAISY = Path(__file__).resolve().parents[2] / "shared" / "daisy"
 SETS = ["erie", "destill", "heating_system", "dryer2", "dryer", "ballbeam", "flutter",
         "robot_arm", "glassfurnace", "thermic_res_wall", "pHdata", "CD_player_arm",
         "winding", "exchanger", "evaporator", "cstr", "steamgen"]
-# the reference (MATLAB ident + C++ slra, maxiter 500; ../shared/reference/README.md): M, iterations, seconds
+# the reference (MATLAB ident + C++ slra, maxiter 500; reference/README.md): M, iterations, seconds
 REFERENCE = {
     "erie": (5.3849193, 118, 0.16), "destill": (2.45990e-5, 50, 0.24),
     "heating_system": (108.68877, 22, 0.06), "dryer2": (361.86964, 500, 14.0),

@@ -3,7 +3,7 @@
 Runs ``ident.daisy_runner.run_benchmark`` (init "auto": the three starts and the rule of
 08-identification) ``--rounds`` times in this process and keeps the best round: wall seconds of the
 whole run, and ident's seconds per mode summed over the sets. The original software's seconds per
-set (errors-in-variables, shared/reference/README.md) are summed for the ratio. Writes
+set (errors-in-variables, reference/README.md) are summed for the ratio. Writes
 benchmarks/daisy_time.json, which 04-daisy.md reads.
 
 Usage: python benchmarks/daisy_time.py [--rounds=2]
@@ -24,7 +24,7 @@ SHARED = ROOT.parent / "shared"
 
 def original_eiv_seconds() -> float:
     """Sum of the seconds column of the original software's DAISY table (errors-in-variables)."""
-    text = (SHARED / "reference" / "README.md").read_text()
+    text = (ROOT / "reference" / "README.md").read_text()
     rows = re.findall(r"^\| \d+ \| \w+ \| [^|]+ \| [^|]+ \| ([0-9.]+) \|$", text, flags=re.M)
     return sum(float(x) for x in rows)
 

@@ -1,6 +1,6 @@
 """The acceptance figures of issue 14 for misfit, in one run (python benchmarks/misfit_acceptance.py).
 
-1. The paper's lag-14 data (shared/reference/msd_uy.txt): M of the original software's model, of
+1. The paper's lag-14 data (reference/msd_uy.txt): M of the original software's model, of
    ident's model, of an orthogonal and of a diagonal change of its state coordinates.
 2. Agreement with a dense least-squares reference (tests/test_smoothing.py's) over random models,
    every setting of the tests: the largest relative difference.
@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ident import ident, misfit
-from ident.examples import shared_path
+from ident.examples import reference_path
 from ident.representations import make_ss, observability_index
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
@@ -24,8 +24,8 @@ from test_smoothing import agree, dense_misfit, random_models, trajectory_of  # 
 
 
 def paper_data() -> None:
-    w = np.loadtxt(shared_path("reference", "msd_uy.txt"))
-    reference = json.loads(shared_path("reference", "msd_results.json").read_text())
+    w = np.loadtxt(reference_path("msd_uy.txt"))
+    reference = json.loads(reference_path("msd_results.json").read_text())
     original = make_ss(*(np.array(reference["ident"][name]) for name in "ABCD"))
     sysh, info, _, _ = ident(w, 1, 14)
     rng = np.random.default_rng(14)

@@ -9,12 +9,12 @@ import control
 import numpy as np
 import pytest
 
-from conftest import SHARED
+from conftest import PROJECT_ROOT
 from ident.identification import ident, misfit
 from ident.solver import SLRAWarning
 from ident.representations import make_ss, markov_parameters, random_system, simulate
 
-REFERENCE = SHARED / "reference"
+REFERENCE = PROJECT_ROOT / "reference"
 needs_reference = pytest.mark.skipif(not REFERENCE.is_dir(), reason=f"reference data not found at {REFERENCE}")
 
 

@@ -27,7 +27,7 @@ from ident.structure import Structure, series_to_parameters
 
 SHARED = Path(__file__).resolve().parents[2] / "shared"
 DAISY = SHARED / "daisy"
-REFERENCE = SHARED / "reference"
+REFERENCE = Path(__file__).resolve().parents[1] / "reference"
 
 
 def reference(name):
@@ -438,7 +438,7 @@ def test_daisy_misfit_reaches_the_reference(name, reference_misfit):
 
 
 def daisy_reference_table():
-    """{set: (printed misfit string or None)} from the DAISY table of shared/reference/README.md."""
+    """{set: (printed misfit string or None)} from the DAISY table of reference/README.md."""
     path = REFERENCE / "README.md"
     if not path.is_file():
         pytest.skip(f"reference results {path} not found (the shared folder beside the project is missing)")

@@ -39,7 +39,7 @@ def mean_fits(results: list[SetResult], start: str | None = None) -> dict[str, f
 
 
 def peer_mean(results: list[SetResult]) -> float:
-    """Mean of the best peer's fit over the sets (the oracle of shared/reference/peers.md)."""
+    """Mean of the best peer's fit over the sets (the oracle of reference/peers.md)."""
     values = [r.peer_fit for r in results if r.peer_fit is not None]
     return float(np.mean(values)) if values else float("nan")
 
@@ -114,7 +114,7 @@ def figure1(results: list[SetResult], path=None):
     ax.set_ylabel("validation fit on the last 30 % (%)")
     ax.set_ylim(0, 100)
     figure.suptitle("Figure 1: validation fit per DAISY data set (reference means from "
-                    "shared/reference/README.md)", fontsize=10)
+                    "reference/README.md)", fontsize=10)
     ax.legend(fontsize=8, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=2, frameon=False)
     if path is not None:
         figure.savefig(path, dpi=120)

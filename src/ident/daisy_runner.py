@@ -35,7 +35,7 @@ MODES = {"oe": "output error (inputs exact)", "eiv": "errors-in-variables"}
 
 
 # <<the reference results>>= literate/04-daisy.md:1934
-REFERENCE_SOURCE = ("shared/reference/README.md: the original MATLAB/Octave ident with the C++ SLRA "
+REFERENCE_SOURCE = ("reference/README.md: the original MATLAB/Octave ident with the C++ SLRA "
                     "solver, maxiter 500")
 REFERENCE_MISFIT = {
     "erie": 5.3849193, "destill": 2.45990e-5, "heating_system": 108.68877, "dryer2": 361.86964,
@@ -46,7 +46,7 @@ REFERENCE_MISFIT = {
 }
 REFERENCE_MEAN_FIT = {"oe": 35.2, "eiv": 36.5}
 SUBSPACE_MEAN_FIT = 53.0
-PEER_SOURCE = "shared/reference/peers.md: the best of six Python tools on each set (the column 'best')"
+PEER_SOURCE = "reference/peers.md: the best of six Python tools on each set (the column 'best')"
 PEER_BEST_FIT = {
     "erie": 38.1, "destill": 33.8, "heating_system": 79.2, "dryer2": 10.5, "dryer": 88.5, "ballbeam": 87.5,
     "flutter": 0.0, "robot_arm": 90.6, "glassfurnace": 68.8, "thermic_res_wall": 83.9, "pHdata": 0.0,
