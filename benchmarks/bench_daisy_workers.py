@@ -5,7 +5,7 @@ Both runs do the whole benchmark (17 sets, both modes, ident's defaults, maxiter
 process's caller's sense: the cluster's start and shutdown are inside its time, as a user of
 ``python -m ident daisy --workers 2`` waits for them. The two alternate, round after round, and the
 best of the rounds of each is kept; the files of both runs are compared byte for byte. Writes
-benchmarks/bench_daisy_workers.json, which 04b-many-identifications.md reads.
+benchmarks/bench_daisy_workers.json, which 15-many-identifications.md reads.
 
 Usage: python benchmarks/bench_daisy_workers.py [--rounds=2] [--workers=2]
 """

@@ -1,4 +1,4 @@
-"""Start-up time of ident against its floor, numpy + scipy.linalg (literate/07-representations.md,
+"""Start-up time of ident against its floor, numpy + scipy.linalg (literate/10-representations.md,
 "State-space models in python-control"; issue 17's bar: `import ident` within 1.5 times the floor).
 
     python benchmarks/bench_import.py [--rounds N] [--out benchmarks/bench_import.json]

@@ -1,5 +1,5 @@
 """Timings of simulate and inistate at T = 1e6 against a Python loop, python-control and scipy
-(python benchmarks/bench_representations.py; see literate/07-representations.md, Simulation)."""
+(python benchmarks/bench_representations.py; see literate/10-representations.md, Simulation)."""
 import time
 
 import control

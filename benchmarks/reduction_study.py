@@ -1,8 +1,8 @@
 """A chosen order on the case of issue 17: a third-order plant with two inputs and two outputs, which
 the model class (order ell p) can only fit with order 4 (ell = 2, p = 2). For several random plants and
 noise levels, the order-4 model of ident(w, 2, 2) and the order-3 model of ident(w, 2, 2, n=3) are
-validated on held-out data against the true plant (literate/07-representations.md, "A model of lower
-order"; literate/02-usage.md).
+validated on held-out data against the true plant (literate/10-representations.md, "A model of lower
+order"; literate/07-usage.md).
 
     python benchmarks/reduction_study.py [--seeds 25] [--out benchmarks/reduction_study.json]
 

@@ -23,7 +23,7 @@ def test_document_is_a_notebook_whose_code_cells_are_the_examples(path) -> None:
 
 def test_ipynb_conversion_roundtrip(tmp_path) -> None:
     """The file written by `jupytext --to ipynb` reads back with the same code cells."""
-    source = PROJECT_ROOT / "literate" / "05-structure.md"
+    source = PROJECT_ROOT / "literate" / "08-structure.md"
     target = tmp_path / "structure.ipynb"
     jupytext.write(jupytext.read(source), target, fmt="ipynb")
     cells = jupytext.read(target).cells

@@ -1,5 +1,5 @@
 """Conversions between kernel and input/state/output representations, simulation and inistate
-(literate/07-representations.md): round trips, annihilation of trajectories, the non-generic case,
+(literate/10-representations.md): round trips, annihilation of trajectories, the non-generic case,
 the P_ell checks, the python-control workaround and the accuracy on non-normal observer forms."""
 import itertools
 import warnings

@@ -520,7 +520,7 @@ def test_the_real_document(real) -> None:
         assert f"<code>{name}" in index, name
     notebooks = sorted(p.name for p in (real / "notebooks").glob("*.ipynb"))
     assert notebooks == sorted(Path(d.path).stem + ".ipynb" for d in web.documents)
-    usage = json.loads(read(real, "notebooks/02-usage.ipynb"))
+    usage = json.loads(read(real, "notebooks/07-usage.ipynb"))
     outputs = [o for c in usage["cells"] if c["cell_type"] == "code" for o in c["outputs"]]
     assert any("max |R - R_true|" in "".join(o.get("text", "")) for o in outputs)
 
