@@ -1148,11 +1148,12 @@ class PageRenderer:
 
     def reference(self, match: re.Match, where: str) -> str:
         """The HTML of a citation, a reference to a label, or a mention of a document."""
-        if match["keys"]:
+        groups = match.groupdict()
+        if groups.get("keys"):
             targets = [self.apparatus.find("ref:" + key, where) for key in re.findall(rf"@({KEY})", match["keys"])]
             return "[" + ", ".join(f'<a class="citation" href="{t.page}#{t.anchor}">{t.text}</a>'
                                    for t in targets) + "]"
-        if match["kind"]:
+        if groups.get("kind"):
             target = self.apparatus.find(f"{match['kind']}:{match['label']}", where)
             return f'<a class="xref" href="{target.page}#{target.anchor}">{html.escape(target.text)}</a>'
         stem = Path(match["name"]).stem
@@ -1272,11 +1273,13 @@ math { font-family: "STIX Two Math", "Latin Modern Math", "Cambria Math", "TeX G
   background-repeat: no-repeat; background-size: 2.5em 100%, 2.5em 100%, .8em 100%, .8em 100%;
   background-attachment: local, local, scroll, scroll; }
 .math-error { color: #b42318; }
-/* a numbered formula: the formula scrolls within its box, the number stays at the right */
-.equation { display: flex; align-items: center; gap: 1em; margin: .9em 0; }
-.equation > .math-display { flex: 1 1 auto; min-width: 0; margin: 0; }
-.equation-number { flex: none; }
-caption { caption-side: top; text-align: left; font-size: .85em; color: var(--muted); padding: 0 0 .3em; }
+/* a numbered formula: centred on the column as long as it fits beside its number at the right, and
+   scrolling within its own box when it does not */
+.equation { display: grid; grid-template-columns: 1fr minmax(0, max-content) 1fr; align-items: center;
+  column-gap: .5em; margin: .9em 0; }
+.equation > .math-display { grid-column: 2; margin: 0; }
+.equation-number { grid-column: 3; justify-self: end; }
+caption { display: block; text-align: left; font-size: .85em; color: var(--muted); padding: 0 0 .3em; }
 .table-number { font-weight: 600; color: var(--text); }
 .part-name { font: .85em/1.4 system-ui, -apple-system, "Segoe UI", "DejaVu Sans", sans-serif; color: var(--muted);
   margin-top: 1.5em; }
