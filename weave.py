@@ -1048,7 +1048,7 @@ class PageRenderer:
         for k, token in enumerate(out):
             if token.type == "inline" and TABLE_CAPTION.match(token.content) and out[k - 1].type == "paragraph_open":
                 self.weave.warn(f"{self.document.path}:{token.map[0] + 1}: warning: a 'Table:' caption that "
-                                "follows no table (a blank line between the table and its caption)")
+                                "follows no table (it belongs right after its table, after one blank line)")
         return out
 
     def number_equations(self, labels: dict[int, str]) -> None:

@@ -735,3 +735,20 @@ def test_unknown_and_duplicate_labels_name_their_line(tmp_path, name, text, erro
         weave.Weave(root, tmp_path / "out", notebooks=False).run()
     assert error in str(raised.value)
     assert not (tmp_path / "out").exists()
+
+
+def test_misplaced_markup_and_missing_documents_are_warnings_with_their_line(tmp_path) -> None:
+    text = ("# A\n\n<!-- part: Too late -->\n\nTable: no table above\n\n[gone](09-gone.md)\n\n"
+            "```sh\ncat 08-gone.md\n```\n")
+    root = make_documents(tmp_path / "project", {"01-a.md": text})
+    woven = weave.Weave(root, tmp_path / "out", notebooks=False)
+    woven.run()
+    assert woven.warnings == [
+        "literate/01-a.md:3: warning: a part marker is read only on the first line of a document, before its "
+        "title; this one is ignored",
+        "literate/01-a.md:5: warning: a 'Table:' caption that follows no table (it belongs right after its "
+        "table, after one blank line)",
+        "literate/01-a.md:10: warning: 08-gone.md is not a literate document",
+        "literate/01-a.md:7: warning: a link to 09-gone.md, which is not a literate document",
+    ]
+    assert 'class="part-name"' not in read(tmp_path / "out", "01-a.html")
