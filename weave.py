@@ -22,6 +22,13 @@ by the expression's value at that place of the document (after the examples abov
 the example below that defines a name it reads), inside a span whose title shows the expression; a
 value of several lines that stands alone on its line is rendered as Markdown of its own (a table).
 
+The pages have the apparatus of a paper (the syntax is in README.md, "The woven document"): parts,
+display formulas, figures and captioned tables numbered through all documents and referred to by
+label (``@eq:NAME``, ``@fig:NAME``, ``@tbl:NAME``), citations ``[@KEY]`` of a numbered
+bibliography, and mentions of a document's file name as links reading its title.  The pages are
+parsed and numbered first, every one of them, and rendered second, so that a reference may point
+forward or to another page.
+
 The weave is all or nothing.  It writes into a new folder beside the output folder and moves the
 files into the output folder only when every example and inline value ran; files it did not write
 (``docs/daisy/``) stay, and files whose bytes did not change are not touched.  Otherwise it exits with
