@@ -22,6 +22,13 @@ by the expression's value at that place of the document (after the examples abov
 the example below that defines a name it reads), inside a span whose title shows the expression; a
 value of several lines that stands alone on its line is rendered as Markdown of its own (a table).
 
+The pages have the apparatus of a paper (the syntax is in README.md, "The woven document"): parts,
+display formulas, figures and captioned tables numbered through all documents and referred to by
+label (``@eq:NAME``, ``@fig:NAME``, ``@tbl:NAME``), citations ``[@KEY]`` of a numbered
+bibliography, and mentions of a document's file name as links reading its title.  The pages are
+parsed and numbered first, every one of them, and rendered second, so that a reference may point
+forward or to another page.
+
 The weave is all or nothing.  It writes into a new folder beside the output folder and moves the
 files into the output folder only when every example and inline value ran; files it did not write
 (``docs/daisy/``) stay, and files whose bytes did not change are not touched.  Otherwise it exits with
@@ -682,6 +689,99 @@ def to_mathml(latex: str, display: bool) -> str:
     return ElementTree.tostring(tree, encoding="unicode")
 
 
+# --------------------------------------------------------------------------------------------
+# The apparatus of a paper: parts, numbered formulas, figures and tables, citations, and links
+# between the documents.  Everything numbered is collected from every page (the first pass)
+# before any page is rendered (the second), so that a reference may point forward or to another page.
+
+
+LABEL = r"[A-Za-z0-9_](?:[\w-]|[.:](?=[\w-]))*"  # a label: letters, digits, '_', '-', inner '.' and ':'
+KEY = r"\w[\w:.+/-]*"  # a citation key
+PART_MARKER = re.compile(r"^<!--\s*part:\s*(?P<title>\S.*?)\s*-->$")
+EQUATION_LABEL = re.compile(rf"\$\$[ \t]*\{{#eq:(?P<name>{LABEL})\}}[ \t]*$")  # after a formula's closing $$
+EQUATION_TAG = re.compile(r"\\tag\s*\{(?P<tag>[^{}]*)\}")
+NO_NUMBER = re.compile(r"\\(?:notag|nonumber)(?![A-Za-z])")
+FIGURE_LABEL = re.compile(rf"\s*\{{#fig:(?P<name>{LABEL})\}}$")  # at the end of a # caption: line
+TABLE_CAPTION = re.compile(r"^Table:\s*")
+TABLE_LABEL = re.compile(rf"\s*\{{#tbl:(?P<name>{LABEL})\}}\s*$")
+BIBLIOGRAPHY_ENTRY = re.compile(rf"^\{{#ref:(?P<key>{KEY})\}}\s*")
+# a mention of a literate document by its file name (NN-name.md), with a heading's anchor or not
+MENTION = re.compile(r"(?<![\w/.-])(?:literate/)?(?P<name>\d\d[\w-]*\.md)(?:#(?P<anchor>[\w-]+))?(?![\w-])")
+IN_TEXT = re.compile(rf"\[(?P<keys>@{KEY}(?:\s*;\s*@{KEY})*)\]"  # [@KEY] or [@KEY1; @KEY2]
+                     rf"|(?<![\w@])@(?P<kind>eq|fig|tbl):(?P<label>{LABEL})"  # @eq:NAME, @fig:NAME, @tbl:NAME
+                     rf"|{MENTION.pattern}")
+CODE_TEXT = re.compile(r'(<span class="[cs][a-z0-9]*">)(.*?)(</span>)', re.S)  # comments and strings (Pygments)
+
+
+@dataclasses.dataclass
+class Target:
+    """Something a reference can point to: a formula, figure, table or bibliography entry."""
+
+    page: str
+    anchor: str
+    text: str  # what a reference to it reads: "(7)", "Figure 3", "Table 2", or the entry's number
+    location: str  # the file:line of its label
+
+
+class Apparatus:
+    """The labels and numbers of the whole document, collected before any page is rendered."""
+
+    def __init__(self):
+        self.targets: dict[str, Target] = {}  # "eq:NAME", "fig:NAME", "tbl:NAME", "ref:KEY"
+        self.counts: dict[str, int] = {"eq": 0, "fig": 0, "tbl": 0, "ref": 0}
+        self.cited: set[str] = set()
+        self.titles: dict[str, str] = {}  # the stem of a document -> its title as plain text
+
+    def next(self, kind: str) -> int:
+        self.counts[kind] += 1
+        return self.counts[kind]
+
+    def define(self, label: str, target: Target) -> None:
+        if label in self.targets:
+            raise WeaveError(f"{target.location}: duplicate label {{#{label}}} "
+                             f"(first at {self.targets[label].location})")
+        self.targets[label] = target
+
+    def find(self, label: str, location: str) -> Target:
+        if label not in self.targets:
+            what = "bibliography entry" if label.startswith("ref:") else "label"
+            raise WeaveError(f"{location}: unknown {what} {label.removeprefix('ref:')!r}")
+        if label.startswith("ref:"):
+            self.cited.add(label)
+        return self.targets[label]
+
+    def uncited(self) -> list[str]:
+        return [f"{target.location}: warning: bibliography entry {label.removeprefix('ref:')!r} is never cited"
+                for label, target in self.targets.items() if label.startswith("ref:") and label not in self.cited]
+
+
+def part_marker(document: tangle.Document) -> tuple[int, str] | None:
+    """(line, title) of the part a document opens: its first non-blank line ``<!-- part: TITLE -->``."""
+    for number, line in document.text_lines():
+        if line.strip():
+            match = PART_MARKER.match(line.strip())
+            return (number, match["title"]) if match else None
+    return None
+
+
+def figure_captions(block: tangle.Block) -> list[tuple[int, str, str | None]]:
+    """(line, caption, label) of each ``# caption:`` line of an example, the label stripped."""
+    found = []
+    for line, text in enumerate(block.lines, start=block.body_location.line):
+        match = CAPTION.match(text)
+        if match:
+            label = FIGURE_LABEL.search(match["caption"])
+            caption = match["caption"][:label.start()] if label else match["caption"]
+            found.append((line, caption, label["name"] if label else None))
+    return found
+
+
+def html_token(content: str, inline: bool = False, **meta):
+    from markdown_it.token import Token
+
+    return Token("html_inline" if inline else "html_block", "", 0, content=content, meta=meta)
+
+
 class PageRenderer:
     """Renders one literate document to HTML with markdown-it, MathML and Pygments."""
 
@@ -695,7 +795,9 @@ class PageRenderer:
         self.formatter = HtmlFormatter(nowrap=True)
         self.blocks = {b.location.line: b for b in document.items if isinstance(b, tangle.Block)}
         self.rendered: set[int] = set()
-        self.figure_count = 0  # figures on the page so far
+        self.figures: dict[tangle.Location, list] = {}  # example -> (number, anchor, caption) per figure
+        self.tokens: list = []  # the page as markdown-it tokens, from the first pass
+        self.title = Path(self.page).stem
         self.md = make_markdown()
         rules = self.md.renderer.rules  # bound methods: add_render_rule would rebind them to the renderer
         rules["fence"] = self.render_fence
@@ -703,6 +805,7 @@ class PageRenderer:
         rules["math_inline"] = self.render_math
         rules["math_block"] = self.render_math
         rules["link_open"] = self.render_link_open
+        self.apparatus: Apparatus = weave.apparatus
 
     # markdown-it render rules: (tokens, idx, options, env) as bound methods
     def render_fence(self, tokens, idx, options, env) -> str:
@@ -733,7 +836,14 @@ class PageRenderer:
             self.weave.warn(f"{self.document.path}:{line}: warning: cannot convert "
                             f"${token.content.strip()}$ to MathML ({type(error).__name__}: {error})")
             mathml = f'<code class="math-error">{html.escape(token.content)}</code>'
-        return f'<div class="math-display">{mathml}</div>\n' if display else mathml
+        if not display:
+            return mathml
+        anchor, shown = token.meta.get("equation", (None, None))
+        if shown is None:
+            return f'<div class="math-display">{mathml}</div>\n'
+        where = f' id="{anchor}"' if anchor else ""
+        return (f'<div class="equation"{where}><div class="math-display">{mathml}</div>'
+                f'<span class="equation-number">{html.escape(shown)}</span></div>\n')
 
     def render_link_open(self, tokens, idx, options, env) -> str:
         token = tokens[idx]
@@ -743,6 +853,9 @@ class PageRenderer:
             stem = Path(target).stem
             if stem in self.weave.stems:
                 token.attrSet("href", f"{stem}.html" + (hash_ + fragment))
+            elif MENTION.fullmatch(Path(target).name):
+                self.weave.warn(f"{self.document.path}:{token.meta.get('line', '?')}: warning: a link to "
+                                f"{target}, which is not a literate document")
         return self.md.renderer.renderToken(tokens, idx, options, env)
 
     # pieces of the page
@@ -755,7 +868,15 @@ class PageRenderer:
             lexer = get_lexer_by_name(language, stripnl=False, ensurenl=True)
         except ClassNotFound:
             lexer = TextLexer(stripnl=False, ensurenl=True)
-        return UNSTYLED_TOKEN.sub(r"\1", highlight(text, lexer, self.formatter))
+        code = UNSTYLED_TOKEN.sub(r"\1", highlight(text, lexer, self.formatter))
+        return CODE_TEXT.sub(lambda m: m[1] + MENTION.sub(self.code_mention, m[2]) + m[3], code)
+
+    def code_mention(self, match: re.Match) -> str:
+        """A literate document named in a comment or string of code: a link, the text unchanged."""
+        stem = Path(match["name"]).stem
+        if stem not in self.weave.stems:
+            return match[0]
+        return f'<a href="{stem}.html{"#" + match["anchor"] if match["anchor"] else ""}">{match[0]}</a>'
 
     def highlight_block(self, lines: list[str], language: str, widen: bool = True) -> str:
         lines = trim_blank(lines)
@@ -834,34 +955,224 @@ class PageRenderer:
             if result.stderr:
                 parts.append(f'<pre class="output stderr" aria-label="standard error">'
                              f'{html.escape(result.stderr.rstrip())}</pre>')
-            captions = [match["caption"] for match in map(CAPTION.match, block.lines) if match]
-            for k, figure in enumerate(result.figures):
-                self.figure_count += 1
-                caption = captions[k] if k < len(captions) else block.name
-                parts.append(self.render_figure(figure, self.figure_count, caption))
+            for figure, numbered in zip(result.figures, self.figures[block.location]):
+                parts.append(self.render_figure(figure, *numbered))
         parts.append("</div>")
         return "\n".join(parts) + "\n"
 
-    def render_figure(self, figure: Figure, number: int, caption: str) -> str:
-        """A figure with its number on the page and its caption (Markdown, from ``# caption:``)."""
+    def render_figure(self, figure: Figure, number: int | None, anchor: str, caption: str, line: int) -> str:
+        """A figure with its number in the document and its caption (Markdown, from ``# caption:``)."""
         source = html.escape(figure.path)
-        if Path(figure.path).suffix.lower() not in IMAGE_SUFFIXES:
+        if number is None:
             return f'<p class="figure-link"><a href="{source}">{html.escape(Path(figure.path).name)}</a></p>'
         size = f' width="{figure.width}" height="{figure.height}"' if figure.width and figure.height else ""
-        text = self.md.renderInline(caption)
+        tokens = self.md.parseInline(caption, {})
+        self.link_text(tokens[0].children or [], line)
+        text = self.md.renderer.render(tokens, self.md.options, {})
         alt = re.sub(r"<[^>]+>", "", text)
-        return (f'<figure class="example-figure" id="figure-{number}"><a href="{source}"><img src="{source}"{size} '
+        return (f'<figure class="example-figure" id="{anchor}"><a href="{source}"><img src="{source}"{size} '
                 f'alt="{html.escape(alt)}"></a><figcaption><span class="figure-number">Figure {number}.</span> '
                 f"{text}</figcaption></figure>")
 
-    def render(self) -> "Page":
+    # the first pass: parse the page, number what it holds and register the labels
+    def prepare(self) -> None:
+        """Parse the page and number its formulas, figures, captioned tables and bibliography entries."""
         text, values = self.weave.text_with_values(self.document.path, marked=True)
-        env: dict = {}
-        tokens = self.md.parse(text, env)
+        lines, labels = text.split("\n"), {}
+        marker = part_marker(self.document)
+        if marker:  # the part shows above the title, not as a comment
+            lines[marker[0] - 1] = ""
+        for number, _ in self.document.text_lines():
+            match = EQUATION_LABEL.search(lines[number - 1])
+            if match:
+                labels[number] = match["name"]
+                lines[number - 1] = lines[number - 1][:match.start()] + "$$"
+        tokens = self.splice_values(self.md.parse("\n".join(lines), {}), values)
         for token in tokens:  # inline tokens have no line of their own: give them their block's
             if token.children and token.map:
                 for child in token.children:
                     child.meta = dict(child.meta or {}, line=token.map[0] + 1)
+        self.tokens = self.caption_tables(tokens)
+        self.number_equations(labels)
+        self.number_figures()
+        self.number_bibliography()
+        title = next((k for k, t in enumerate(self.tokens) if t.type == "heading_open" and t.tag == "h1"), None)
+        if title is not None:
+            self.title = plain_title(self.tokens[title + 1])
+        self.apparatus.titles[Path(self.page).stem] = self.title
+        for block in self.blocks.values():  # code naming a document that is not one (links: render_link_open)
+            for line, text in enumerate(block.lines, start=block.body_location.line):
+                for match in MENTION.finditer(text):
+                    self.check_mention(match, line)
+
+    def splice_values(self, tokens: list, values: list[tuple[str, str]]) -> list:
+        """The tokens with each value of several lines parsed as Markdown in place of its paragraph."""
+        for k, (expression, value) in enumerate(values):
+            placeholder = BLOCK_PLACEHOLDER.format(k)
+            at = next((i for i, t in enumerate(tokens) if i and t.type == "inline" and t.content == placeholder
+                       and tokens[i - 1].type == "paragraph_open"), None)
+            if at is None:
+                raise WeaveError(f"{self.document.path}: the value of `{{python}} {expression}` has several "
+                                 "lines; give it a paragraph of its own (blank lines before and after)")
+            inner = self.md.parse(value, {})
+            for token in inner:
+                token.map = tokens[at].map
+            tokens[at - 1:at + 2] = [html_token(f'<div class="computed" title="{html.escape(expression)}">\n'),
+                                     *inner, html_token("</div>\n", value_end=True)]
+        return tokens
+
+    def caption_tables(self, tokens: list) -> list:
+        """A table followed by a paragraph ``Table: caption {#tbl:NAME}`` gets it as its numbered caption."""
+        out, table, k = [], 0, 0
+        while k < len(tokens):
+            out.append(tokens[k])
+            k += 1
+            if out[-1].type == "table_open":
+                table = len(out) - 1
+            if out[-1].type != "table_close":
+                continue
+            after = k
+            while after < len(tokens) and tokens[after].meta.get("value_end"):  # a table that is a value
+                after += 1
+            if not (after + 2 < len(tokens) and tokens[after].type == "paragraph_open"
+                    and TABLE_CAPTION.match(tokens[after + 1].content)):
+                continue
+            out += tokens[k:after]
+            inline, k = tokens[after + 1], after + 3
+            children = inline.children
+            children[0].content = TABLE_CAPTION.sub("", children[0].content, count=1)
+            label = TABLE_LABEL.search(children[-1].content) if children[-1].type == "text" else None
+            if label:
+                children[-1].content = children[-1].content[:label.start()]
+            number = self.apparatus.next("tbl")
+            anchor = f"tbl-{label['name']}" if label else f"table-{number}"
+            if label:
+                self.apparatus.define("tbl:" + label["name"], Target(
+                    self.page, anchor, f"Table {number}", f"{self.document.path}:{inline.map[0] + 1}"))
+            out[table].attrSet("id", anchor)
+            out[table + 1:table + 1] = [html_token(f'<caption><span class="table-number">Table {number}.</span> '),
+                                        inline, html_token("</caption>\n")]
+        for k, token in enumerate(out):
+            if token.type == "inline" and TABLE_CAPTION.match(token.content) and out[k - 1].type == "paragraph_open":
+                self.weave.warn(f"{self.document.path}:{token.map[0] + 1}: warning: a 'Table:' caption that "
+                                "follows no table (it belongs right after its table, after one blank line)")
+        return out
+
+    def number_equations(self, labels: dict[int, str]) -> None:
+        """Number the display formulas; ``\\tag{NAME}`` shows (NAME), ``\\notag`` no number."""
+        for token in self.tokens:
+            if token.type != "math_block":
+                continue
+            name = labels.pop(token.map[1], None) if token.map else None
+            tag, plain = EQUATION_TAG.search(token.content), NO_NUMBER.search(token.content)
+            token.content = NO_NUMBER.sub("", EQUATION_TAG.sub("", token.content))
+            shown = f"({tag['tag'].strip()})" if tag else None if plain else f"({self.apparatus.next('eq')})"
+            anchor = f"eq-{name}" if name else None
+            if name:
+                location = f"{self.document.path}:{token.map[1]}"
+                if shown is None:
+                    raise WeaveError(f"{location}: the formula labelled {{#eq:{name}}} has no number (\\notag)")
+                self.apparatus.define("eq:" + name, Target(self.page, anchor, shown, location))
+            token.meta = dict(token.meta or {}, equation=(anchor, shown))
+        for line, name in labels.items():
+            raise WeaveError(f"{self.document.path}:{line}: the label {{#eq:{name}}} closes no display formula "
+                             "(write it after the closing $$)")
+
+    def number_figures(self) -> None:
+        """Number the figures of the examples; a caption ending in ``{#fig:NAME}`` labels its figure."""
+        for token in self.tokens:
+            block = self.blocks.get(token.map[0] + 1) if token.type == "fence" and token.map else None
+            if block is None or block.kind != "example":
+                continue
+            result = self.results.get(block.location)
+            figures = result.figures if result else []
+            captions = figure_captions(block)
+            numbered = []
+            for k, figure in enumerate(figures):
+                line, caption, name = captions[k] if k < len(captions) else (block.location.line, block.name, None)
+                number = self.apparatus.next("fig") if Path(figure.path).suffix.lower() in IMAGE_SUFFIXES else None
+                anchor = f"fig-{name}" if name else f"figure-{number}"
+                if name and number:
+                    self.apparatus.define("fig:" + name, Target(self.page, anchor, f"Figure {number}",
+                                                                f"{self.document.path}:{line}"))
+                numbered.append((number, anchor, caption, line))
+            for line, _, name in captions[len(figures):]:
+                if name:
+                    raise WeaveError(f"{self.document.path}:{line}: the caption labelled {{#fig:{name}}} has no "
+                                     f"figure (the example drew {len(figures)})")
+            self.figures[block.location] = numbered
+
+    def number_bibliography(self) -> None:
+        """Number the list items that begin with ``{#ref:KEY}``, the entries of a bibliography."""
+        for k, token in enumerate(self.tokens):
+            inline = self.tokens[k + 2] if token.type == "list_item_open" and k + 2 < len(self.tokens) else None
+            match = BIBLIOGRAPHY_ENTRY.match(inline.content) if inline and inline.type == "inline" else None
+            if not match or not inline.children or inline.children[0].type != "text":
+                continue
+            number, key = self.apparatus.next("ref"), match["key"]
+            self.apparatus.define("ref:" + key, Target(self.page, f"ref-{key}", str(number),
+                                                       f"{self.document.path}:{inline.map[0] + 1}"))
+            token.attrSet("id", f"ref-{key}")
+            inline.children[0].content = BIBLIOGRAPHY_ENTRY.sub("", inline.children[0].content, count=1)
+            inline.children.insert(0, html_token(f'<span class="ref-number">[{number}]</span> ', inline=True))
+            for opening in reversed(self.tokens[:k]):  # the list it is in
+                if opening.type in ("bullet_list_open", "ordered_list_open") and opening.level == token.level - 1:
+                    opening.attrSet("class", "bibliography")
+                    break
+
+    # the second pass: references become links
+    def link_text(self, children: list, line: int | None = None) -> None:
+        """Citations, references to labels and mentions of documents in inline tokens become links
+        (not inside links)."""
+        from markdown_it.common.utils import escapeHtml
+
+        depth = 0
+        for child in children:
+            depth += (child.type == "link_open") - (child.type == "link_close")
+            where = f"{self.document.path}:{line or child.meta.get('line', '?')}"
+            if depth or child.type not in ("text", "code_inline"):
+                continue
+            if child.type == "code_inline":
+                match = MENTION.fullmatch(child.content)
+                if match and self.check_mention(match, line or child.meta.get("line", "?")):
+                    child.type, child.content = "html_inline", self.reference(match, where)
+                continue
+            pieces, last = [], 0
+            for match in IN_TEXT.finditer(child.content):
+                if match["name"] and not self.check_mention(match, line or child.meta.get("line", "?")):
+                    continue
+                pieces += [escapeHtml(child.content[last:match.start()]), self.reference(match, where)]
+                last = match.end()
+            if pieces:
+                child.type, child.content = "html_inline", "".join(pieces) + escapeHtml(child.content[last:])
+
+    def check_mention(self, match: re.Match, line) -> bool:
+        """Whether a mention names a literate document; a warning if not."""
+        if Path(match["name"]).stem in self.weave.stems:
+            return True
+        self.weave.warn(f"{self.document.path}:{line}: warning: {match['name']} is not a literate document")
+        return False
+
+    def reference(self, match: re.Match, where: str) -> str:
+        """The HTML of a citation, a reference to a label, or a mention of a document."""
+        groups = match.groupdict()
+        if groups.get("keys"):
+            targets = [self.apparatus.find("ref:" + key, where) for key in re.findall(rf"@({KEY})", match["keys"])]
+            return "[" + ", ".join(f'<a class="citation" href="{t.page}#{t.anchor}">{t.text}</a>'
+                                   for t in targets) + "]"
+        if groups.get("kind"):
+            target = self.apparatus.find(f"{match['kind']}:{match['label']}", where)
+            return f'<a class="xref" href="{target.page}#{target.anchor}">{html.escape(target.text)}</a>'
+        stem = Path(match["name"]).stem
+        anchor = "#" + match["anchor"] if match["anchor"] else ""
+        return f'<a class="document" href="{stem}.html{anchor}">{html.escape(self.apparatus.titles[stem])}</a>'
+
+    def render(self) -> "Page":
+        tokens = self.tokens
+        for k, token in enumerate(tokens):
+            if token.type == "inline" and token.children and not (k and tokens[k - 1].type == "heading_open"):
+                self.link_text(token.children)
+        env: dict = {}
         headings = []
         for k, token in enumerate(tokens):
             if token.type == "heading_open":
@@ -869,25 +1180,19 @@ class PageRenderer:
                 label = self.md.renderer.renderInline(inline.children or [], self.md.options, env)
                 headings.append((int(token.tag[1]), token.attrGet("id"), label, plain_title(inline)))
         title_end = next((k for k, t in enumerate(tokens) if t.type == "heading_close" and t.tag == "h1"), -1)
-        head = self.md.renderer.render(tokens[:title_end + 1], self.md.options, env)
+        part = self.weave.parts.get(self.document.path)
+        head = f'<div class="part-name">{html.escape(part)}</div>\n' if part else ""
+        head += self.md.renderer.render(tokens[:title_end + 1], self.md.options, env)
         body = self.md.renderer.render(tokens[title_end + 1:], self.md.options, env)
-        for k, (expression, value) in enumerate(values):  # values of several lines, rendered as Markdown
-            placeholder = f"<p>{BLOCK_PLACEHOLDER.format(k)}</p>"
-            if placeholder not in body:
-                raise WeaveError(f"{self.document.path}: the value of `{{python}} {expression}` has several "
-                                 "lines; give it a paragraph of its own (blank lines before and after)")
-            body = body.replace(placeholder, f'<div class="computed" title="{html.escape(expression)}">\n'
-                                             f"{self.md.render(value)}</div>")
         missing = [b for line, b in self.blocks.items() if b.kind != "display" and line not in self.rendered]
         if missing:
             raise WeaveError(f"{missing[0].location}: the Markdown parser did not read this {missing[0].kind} "
                              "as a fenced code block; start its fence at column 0 outside lists and quotes")
-        title = next((plain for level, _, _, plain in headings if level == 1), Path(self.page).stem)
         headings = [(level, anchor, label) for level, anchor, label, _ in headings]
         first_section = next((k for k, t in enumerate(tokens) if k > title_end and t.type == "heading_open"
                               and t.tag == "h2" and t.attrGet("id") not in FRONT_SECTIONS), len(tokens))
         front = self.md.renderer.render(tokens[title_end + 1:first_section], self.md.options, env)
-        return Page(self.document, self.page, title, headings, head, body, front)
+        return Page(self.document, self.page, self.title, headings, head, body, front)
 
 
 def wide(lines: list[str]) -> str:
@@ -975,6 +1280,20 @@ math { font-family: "STIX Two Math", "Latin Modern Math", "Cambria Math", "TeX G
   background-repeat: no-repeat; background-size: 2.5em 100%, 2.5em 100%, .8em 100%, .8em 100%;
   background-attachment: local, local, scroll, scroll; }
 .math-error { color: #b42318; }
+/* a numbered formula: centred on the column as long as it fits beside its number at the right, and
+   scrolling within its own box when it does not */
+.equation { display: grid; grid-template-columns: 1fr minmax(0, max-content) 1fr; align-items: center;
+  column-gap: .5em; margin: .9em 0; }
+.equation > .math-display { grid-column: 2; margin: 0; }
+.equation-number { grid-column: 3; justify-self: end; }
+caption { display: block; text-align: left; font-size: .85em; color: var(--muted); padding: 0 0 .3em; }
+.table-number { font-weight: 600; color: var(--text); }
+.part-name { font: .85em/1.4 system-ui, -apple-system, "Segoe UI", "DejaVu Sans", sans-serif; color: var(--muted);
+  margin-top: 1.5em; }
+.part-name + h1 { margin-top: .2em; }
+nav.toc h3.part { font-size: .95em; margin: .8em 0 .2em; }
+ul.bibliography, ol.bibliography { list-style: none; padding-left: 0; }
+.bibliography li { padding-left: 2.2em; text-indent: -2.2em; }
 nav.toc { border: 1px solid var(--rule); border-radius: 4px; padding: .5em 1em; margin: 1em 0 1.5em;
   font-size: .92em; background: #fbfcfd; }
 nav.toc h2 { font-size: 1em; border: 0; margin: .3em 0; padding: 0; }
@@ -1029,6 +1348,8 @@ class Weave:
         self.web = tangle.build_web([tangle.parse_document(text, path) for path, text in self.texts.items()])
         self.xref = cross_references(self.web)
         self.stems = {Path(d.path).stem for d in self.web.documents}
+        self.parts = self.find_parts()  # document -> the title of the part it belongs to (or None)
+        self.apparatus = Apparatus()
         self.values: dict[str, dict] = {}  # document -> (line, start, end) of an inline value -> its text
 
     def text_with_values(self, path: str, marked: bool) -> tuple[str, list[tuple[str, str]]]:
@@ -1049,6 +1370,19 @@ class Weave:
                 shown = f'<span class="computed" title="{html.escape(expression)}">{value}</span>'
             lines[line - 1] = lines[line - 1][:start] + shown + lines[line - 1][end:]
         return "\n".join(lines), blocks
+
+    def find_parts(self) -> dict[str, str | None]:
+        """The part of each document: the one its part marker opens, or the one before it."""
+        parts, current = {}, None
+        for document in self.web.documents:
+            marker = part_marker(document)
+            current = marker[1] if marker else current
+            parts[document.path] = current
+            for number, line in document.text_lines():
+                if PART_MARKER.match(line.strip()) and (not marker or number != marker[0]):
+                    self.warn(f"{document.path}:{number}: warning: a part marker is read only on the first "
+                              "line of a document, before its title; this one is ignored")
+        return parts
 
     def warn(self, message: str) -> None:
         if message in self.warnings:
@@ -1097,7 +1431,12 @@ class Weave:
         self.values = {path: {(unit.location.line, unit.start, unit.end): outcome.value
                               for unit, outcome in zip(run.units, run.outcomes)
                               if isinstance(unit, tangle.InlineValue)} for path, run in runs.items()}
-        pages = [PageRenderer(self, d, results[d.path]).render() for d in self.web.documents]
+        renderers = [PageRenderer(self, d, results[d.path]) for d in self.web.documents]
+        for renderer in renderers:  # every label is known before any page is rendered
+            renderer.prepare()
+        pages = [renderer.render() for renderer in renderers]
+        for warning in self.apparatus.uncited():
+            self.warn(warning)
         self.write("style.css", self.stylesheet())
         for k, page in enumerate(pages):
             previous = pages[k - 1] if k > 0 else None
@@ -1224,12 +1563,19 @@ class Weave:
                  "the code chunks of the package with their cross references, and the examples with their "
                  f'output as they ran when this was woven. <a href="{pages[0].file if pages else "#"}">'
                  "Start reading</a>.</p>",
-                 '<nav class="toc" aria-label="contents"><h2>Contents</h2>\n<ol>']
-        for page in pages:
+                 '<nav class="toc" aria-label="contents"><h2>Contents</h2>']
+        part = None
+        for k, page in enumerate(pages):  # under the heading of their part, numbered on across parts
+            if k == 0 or self.parts[page.document.path] != part:
+                part = self.parts[page.document.path]
+                parts.append(("</ol>\n" if k else "") + (f'<h3 class="part">{html.escape(part)}</h3>\n' if part else "")
+                             + (f'<ol start="{k + 1}">' if k else "<ol>"))
             sub = self.toc_html(page.headings, page.file, with_page=True, levels=(2,))
             notebook = (f' <span class="muted">(<a href="notebooks/{Path(page.file).stem}.ipynb" download>'
                         "notebook</a>)</span>" if self.notebooks else "")
             parts.append(f'<li><a href="{page.file}">{html.escape(page.title)}</a>{notebook}\n{sub}</li>')
+        if part:
+            parts.append(f'</ol>\n<h3 class="part">Indexes</h3>\n<ol start="{len(pages) + 1}">')
         parts.append('<li><a href="#chunks">Index of chunks</a></li>')
         if api:
             parts.append('<li><a href="#public-names">Index of the public names</a></li>')

@@ -528,3 +528,227 @@ def test_the_real_document(real) -> None:
 def test_the_woven_document_stays_small(real) -> None:
     size = sum(p.stat().st_size for p in real.rglob("*") if p.is_file())
     assert size < 5_000_000, f"docs/ would be {size / 1e6:.1f} MB"
+
+
+# --------------------------------------------------------------------------------------------
+# the apparatus of a paper: parts, numbered formulas, figures and tables, citations, mentions
+
+
+PAPER = {
+    "01-front.md": '''\
+# The front matter
+
+The front cites [@alpha] and names `03-paper.md`, 03-paper.md#the-method and `07-missing.md`.
+
+$$
+a = b
+$$
+
+```python
+# example: a first figure
+import matplotlib.pyplot as plt
+
+plt.figure(figsize=(1, 1))
+```
+''',
+    "02-intro.md": '''\
+
+<!-- part: Part I. The paper -->
+# Introduction
+
+See @eq:sysid, @eq:second, @fig:line, @tbl:data and @tbl:computed [@alpha; @beta], not `@eq:sysid`.
+
+$$
+x = 1 \\notag
+$$
+
+$$
+y = 2 \\quad $$ {#eq:second}
+
+$$ z = 3 $$ {#eq:inline}
+''',
+    "03-paper.md": '''\
+# The paper
+
+## The method
+
+$$
+w \\in \\mathcal{B} \\tag{SYSID}
+$$ {#eq:sysid}
+
+$$
+v = 4
+$$
+
+| a | b |
+|---|---|
+| 1 | 2 |
+
+Table: Some *data*, cited [@beta]. {#tbl:data}
+
+```python
+# example: draws a line
+import matplotlib.pyplot as plt
+
+# caption: A line, see @eq:inline. {#fig:line}
+plt.figure(figsize=(1, 1))
+plt.plot([1, 2])
+table_value = "| x | y |\\n|---|---|\\n| 3 | 4 |"
+```
+
+`{python} table_value`
+
+Table: A computed table. {#tbl:computed}
+
+```python .noeval
+# <<src/ident/paper.py>>=
+# the reasons are in 02-intro.md
+NAME = "04-refs.md"
+```
+''',
+    "04-refs.md": '''\
+<!-- part: Part II. Back matter -->
+# References
+
+- {#ref:alpha} A. Author. *A book*. 2001.
+- {#ref:beta} B. Author. An article. 2002.
+- {#ref:gamma} C. Author. Never cited.
+''',
+}
+
+
+def make_documents(root: Path, documents: dict[str, str]) -> Path:
+    (root / "literate").mkdir(parents=True)
+    for name, text in documents.items():
+        (root / "literate" / name).write_text(text, encoding="utf-8")
+    outputs, _ = tangle.tangle(root)
+    tangle.write(root, outputs)
+    return root
+
+
+@pytest.fixture(scope="module")
+def paper(tmp_path_factory) -> tuple[Path, list[str]]:
+    root = make_documents(tmp_path_factory.mktemp("paper"), PAPER)
+    woven = weave.Weave(root, root / "docs", notebooks=False)
+    woven.run()
+    return root / "docs", woven.warnings
+
+
+def test_parts_group_the_contents_and_head_their_pages(paper) -> None:
+    out, _ = paper
+    index = read(out, "index.html")
+    contents = index[index.index('<nav class="toc"'):]
+    assert contents.index('href="01-front.html"') < contents.index('<h3 class="part">Part I. The paper</h3>')
+    assert contents.index("Part I. The paper") < contents.index('href="02-intro.html"') \
+        < contents.index('href="03-paper.html"') < contents.index("Part II. Back matter") \
+        < contents.index('href="04-refs.html"') < contents.index('<h3 class="part">Indexes</h3>')
+    assert '<ol start="2">' in contents and '<ol start="4">' in contents
+    assert 'class="part-name"' not in read(out, "01-front.html")
+    for page, part in (("02-intro.html", "Part I. The paper"), ("03-paper.html", "Part I. The paper"),
+                       ("04-refs.html", "Part II. Back matter")):
+        text = read(out, page)
+        assert f'<div class="part-name">{part}</div>\n<h1' in text
+        assert "<!--" not in text and "part:" not in text
+
+
+def test_formulas_are_numbered_across_documents_with_tags_and_labels(paper) -> None:
+    out, _ = paper
+    front, intro, body = read(out, "01-front.html"), read(out, "02-intro.html"), read(out, "03-paper.html")
+    assert '<span class="equation-number">(1)</span>' in front
+    assert intro.count('class="equation-number"') == 2  # \notag: no number, and no \notag in the formula
+    assert '<div class="equation" id="eq-second"><div class="math-display"><math' in intro
+    assert '<span class="equation-number">(2)</span>' in intro.split('id="eq-second"')[1].split("</div>\n")[0]
+    assert 'id="eq-inline"' in intro and '<span class="equation-number">(3)</span>' in intro
+    assert '<div class="equation" id="eq-sysid">' in body and '<span class="equation-number">(SYSID)</span>' in body
+    assert '<span class="equation-number">(4)</span>' in body  # a tag takes no number
+    assert "{#eq:" not in intro + body and "notag" not in intro and "(SYSID)</mtext>" not in body
+    assert '<a class="xref" href="03-paper.html#eq-sysid">(SYSID)</a>' in intro
+    assert '<a class="xref" href="02-intro.html#eq-second">(2)</a>' in intro
+    assert "not <code>@eq:sysid</code>" in intro  # code is not a reference
+    check_links(out)
+
+
+def test_figures_are_numbered_across_documents_and_labelled(paper) -> None:
+    out, _ = paper
+    front, intro, body = read(out, "01-front.html"), read(out, "02-intro.html"), read(out, "03-paper.html")
+    assert '<figure class="example-figure" id="figure-1">' in front and "Figure 1.</span>" in front
+    assert '<figure class="example-figure" id="fig-line">' in body
+    assert ('<span class="figure-number">Figure 2.</span> A line, see '
+            '<a class="xref" href="02-intro.html#eq-inline">(3)</a>.</figcaption>') in body
+    assert "{#fig:" not in body and 'alt="A line, see (3)."' in body
+    assert '<a class="xref" href="03-paper.html#fig-line">Figure 2</a>' in intro
+
+
+def test_tables_with_a_caption_paragraph_are_numbered(paper) -> None:
+    out, _ = paper
+    body, intro = read(out, "03-paper.html"), read(out, "02-intro.html")
+    assert ('<table id="tbl-data">\n<caption><span class="table-number">Table 1.</span> Some <em>data</em>, '
+            'cited [<a class="citation" href="04-refs.html#ref-beta">2</a>].</caption>\n<thead>') in body
+    computed = body.split('<div class="computed" title="table_value">')[1].split("</div>")[0]
+    assert '<table id="tbl-computed">\n<caption><span class="table-number">Table 2.</span> A computed table.' \
+        in computed and "<td>3</td>" in computed
+    assert "Table:" not in body and "{#tbl:" not in body
+    assert '<a class="xref" href="03-paper.html#tbl-data">Table 1</a>' in intro
+    assert '<a class="xref" href="03-paper.html#tbl-computed">Table 2</a>' in intro
+
+
+def test_citations_link_to_the_numbered_bibliography(paper) -> None:
+    out, warnings = paper
+    refs, intro = read(out, "04-refs.html"), read(out, "02-intro.html")
+    assert '<ul class="bibliography">' in refs
+    assert '<li id="ref-alpha"><span class="ref-number">[1]</span> A. Author. <em>A book</em>. 2001.</li>' in refs
+    assert '<li id="ref-gamma"><span class="ref-number">[3]</span> C. Author.' in refs and "{#ref:" not in refs
+    assert ('[<a class="citation" href="04-refs.html#ref-alpha">1</a>, '
+            '<a class="citation" href="04-refs.html#ref-beta">2</a>]') in intro
+    assert '[<a class="citation" href="04-refs.html#ref-alpha">1</a>]' in read(out, "01-front.html")
+    assert "literate/04-refs.md:6: warning: bibliography entry 'gamma' is never cited" in warnings
+    assert not [w for w in warnings if "'alpha'" in w or "'beta'" in w]
+
+
+def test_mentions_of_documents_become_links_named_by_their_titles(paper) -> None:
+    out, warnings = paper
+    front, body = read(out, "01-front.html"), read(out, "03-paper.html")
+    assert 'names <a class="document" href="03-paper.html">The paper</a>, ' in front
+    assert '<a class="document" href="03-paper.html#the-method">The paper</a> and' in front
+    assert "<code>07-missing.md</code>" in front
+    assert "literate/01-front.md:3: warning: 07-missing.md is not a literate document" in warnings
+    assert '<span class="c1"># the reasons are in <a href="02-intro.html">02-intro.md</a></span>' in body
+    assert '<span class="s2">"<a href="04-refs.html">04-refs.md</a>"</span>' in body
+
+
+@pytest.mark.parametrize("name, text, error", [
+    ("unknown label", "See @eq:nope.\n", "literate/01-a.md:3: unknown label 'eq:nope'"),
+    ("unknown figure", "See @fig:nope.\n", "literate/01-a.md:3: unknown label 'fig:nope'"),
+    ("unknown key", "As in [@x; @nope].\n\n- {#ref:x} X.\n", "literate/01-a.md:3: unknown bibliography entry 'nope'"),
+    ("duplicate label", "$$\na\n$$ {#eq:a}\n\n$$\nb\n$$ {#eq:a}\n",
+     "literate/01-a.md:9: duplicate label {#eq:a} (first at literate/01-a.md:5)"),
+    ("duplicate table", "| a |\n|---|\n\nTable: one {#tbl:t}\n\n| b |\n|---|\n\nTable: two {#tbl:t}\n",
+     "literate/01-a.md:11: duplicate label {#tbl:t} (first at literate/01-a.md:6)"),
+    ("duplicate key", "[@k]\n\n- {#ref:k} One.\n- {#ref:k} Two.\n",
+     "literate/01-a.md:6: duplicate label {#ref:k} (first at literate/01-a.md:5)"),
+    ("label after no formula", "costs $$ {#eq:a}\n", "literate/01-a.md:3: the label {#eq:a} closes no display formula"),
+    ("label on no number", "$$\na \\notag\n$$ {#eq:a}\n", "literate/01-a.md:5: the formula labelled {#eq:a} has no number"),
+])
+def test_unknown_and_duplicate_labels_name_their_line(tmp_path, name, text, error) -> None:
+    root = make_documents(tmp_path / "project", {"01-a.md": "# A\n\n" + text})
+    with pytest.raises(weave.WeaveError) as raised:
+        weave.Weave(root, tmp_path / "out", notebooks=False).run()
+    assert error in str(raised.value)
+    assert not (tmp_path / "out").exists()
+
+
+def test_misplaced_markup_and_missing_documents_are_warnings_with_their_line(tmp_path) -> None:
+    text = ("# A\n\n<!-- part: Too late -->\n\nTable: no table above\n\n[gone](09-gone.md)\n\n"
+            "```sh\ncat 08-gone.md\n```\n")
+    root = make_documents(tmp_path / "project", {"01-a.md": text})
+    woven = weave.Weave(root, tmp_path / "out", notebooks=False)
+    woven.run()
+    assert woven.warnings == [
+        "literate/01-a.md:3: warning: a part marker is read only on the first line of a document, before its "
+        "title; this one is ignored",
+        "literate/01-a.md:5: warning: a 'Table:' caption that follows no table (it belongs right after its "
+        "table, after one blank line)",
+        "literate/01-a.md:10: warning: 08-gone.md is not a literate document",
+        "literate/01-a.md:7: warning: a link to 09-gone.md, which is not a literate document",
+    ]
+    assert 'class="part-name"' not in read(tmp_path / "out", "01-a.html")
