@@ -707,9 +707,11 @@ TABLE_LABEL = re.compile(rf"\s*\{{#tbl:(?P<name>{LABEL})\}}\s*$")
 BIBLIOGRAPHY_ENTRY = re.compile(rf"^\{{#ref:(?P<key>{KEY})\}}\s*")
 # a mention of a literate document by its file name (NN-name.md), with a heading's anchor or not
 MENTION = re.compile(r"(?<![\w/.-])(?:literate/)?(?P<name>\d\d[\w-]*\.md)(?:#(?P<anchor>[\w-]+))?(?![\w-])")
+# a mention of a file or folder of the repository outside literate/ (reference/README.md, benchmarks/x.py)
+REPOSITORY_PATH = re.compile(r"(?<![\w/.-])(?P<path>(?:reference|benchmarks|tests|src|docs)(?:/[\w.-]*\w)+/?)(?![\w/-])")
 IN_TEXT = re.compile(rf"\[(?P<keys>@{KEY}(?:\s*;\s*@{KEY})*)\]"  # [@KEY] or [@KEY1; @KEY2]
                      rf"|(?<![\w@])@(?P<kind>eq|fig|tbl):(?P<label>{LABEL})"  # @eq:NAME, @fig:NAME, @tbl:NAME
-                     rf"|{MENTION.pattern}")
+                     rf"|{MENTION.pattern}|{REPOSITORY_PATH.pattern}")
 CODE_TEXT = re.compile(r'(<span class="[cs][a-z0-9]*">)(.*?)(</span>)', re.S)  # comments and strings (Pygments)
 
 
@@ -1136,10 +1138,14 @@ class PageRenderer:
                 match = MENTION.fullmatch(child.content)
                 if match and self.check_mention(match, line or child.meta.get("line", "?")):
                     child.type, child.content = "html_inline", self.reference(match, where)
+                elif (match := REPOSITORY_PATH.fullmatch(child.content)) and self.repository_href(match["path"]):
+                    child.type, child.content = "html_inline", self.reference(match, where, code=True)
                 continue
             pieces, last = [], 0
             for match in IN_TEXT.finditer(child.content):
                 if match["name"] and not self.check_mention(match, line or child.meta.get("line", "?")):
+                    continue
+                if match["path"] and not self.repository_href(match["path"]):
                     continue
                 pieces += [escapeHtml(child.content[last:match.start()]), self.reference(match, where)]
                 last = match.end()
@@ -1153,9 +1159,21 @@ class PageRenderer:
         self.weave.warn(f"{self.document.path}:{line}: warning: {match['name']} is not a literate document")
         return False
 
-    def reference(self, match: re.Match, where: str) -> str:
-        """The HTML of a citation, a reference to a label, or a mention of a document."""
+    def repository_href(self, path: str) -> str | None:
+        """The link from the woven pages to a file or folder of the repository, or None where there is
+        none (a reader of the pages in a clone opens it; a mention of a missing path stays text)."""
+        target = self.weave.root / path.rstrip("/")
+        if not target.exists():
+            return None
+        return Path(os.path.relpath(target, self.weave.out)).as_posix() + ("/" if target.is_dir() else "")
+
+    def reference(self, match: re.Match, where: str, code: bool = False) -> str:
+        """The HTML of a citation, a reference to a label, or a mention of a document or a file."""
         groups = match.groupdict()
+        if groups.get("path"):
+            text = html.escape(match["path"])
+            return (f'<a class="file" href="{html.escape(self.repository_href(match["path"]))}">'
+                    + (f"<code>{text}</code>" if code else text) + "</a>")
         if groups.get("keys"):
             targets = [self.apparatus.find("ref:" + key, where) for key in re.findall(rf"@({KEY})", match["keys"])]
             return "[" + ", ".join(f'<a class="citation" href="{t.page}#{t.anchor}">{t.text}</a>'

@@ -716,6 +716,21 @@ def test_mentions_of_documents_become_links_named_by_their_titles(paper) -> None
     assert '<span class="s2">"<a href="04-refs.html">04-refs.md</a>"</span>' in body
 
 
+def test_mentions_of_repository_files_become_links_from_the_pages(tmp_path) -> None:
+    # a reader of docs/ in a clone opens ../reference/README.md; a path that does not exist stays text
+    root = make_documents(tmp_path, {"01-a.md": "# A\n\nSee `reference/README.md`, benchmarks/run.py, "
+                                                 "`benchmarks/missing.py` and docs/daisy/.\n"})
+    for path in ("reference/README.md", "benchmarks/run.py", "docs/daisy/table.md"):
+        (root / path).parent.mkdir(parents=True, exist_ok=True)
+        (root / path).write_text("x\n")
+    weave.Weave(root, root / "docs", notebooks=False).run()
+    page = read(root / "docs", "01-a.html")
+    assert '<a class="file" href="../reference/README.md"><code>reference/README.md</code></a>' in page
+    assert '<a class="file" href="../benchmarks/run.py">benchmarks/run.py</a>' in page
+    assert "<code>benchmarks/missing.py</code>" in page and 'href="../benchmarks/missing.py"' not in page
+    assert '<a class="file" href="daisy/">docs/daisy/</a>' in page
+
+
 @pytest.mark.parametrize("name, text, error", [
     ("unknown label", "See @eq:nope.\n", "literate/01-a.md:3: unknown label 'eq:nope'"),
     ("unknown figure", "See @fig:nope.\n", "literate/01-a.md:3: unknown label 'fig:nope'"),
