@@ -528,3 +528,18 @@ def test_the_real_document(real) -> None:
 def test_the_woven_document_stays_small(real) -> None:
     size = sum(p.stat().st_size for p in real.rglob("*") if p.is_file())
     assert size < 5_000_000, f"docs/ would be {size / 1e6:.1f} MB"
+
+
+def test_the_commands_in_docs_readme_exist() -> None:
+    """docs/README.md is written by hand (the weave leaves it alone): each command its shell block
+    gives runs (with --help appended, so that nothing is written)."""
+    text = (PROJECT_ROOT / "docs" / "README.md").read_text(encoding="utf-8")
+    commands = [command.strip() for block in re.findall(r"```sh\n(.*?)```", text, re.S)
+                for line in block.splitlines() for command in line.split("&&") if command.strip()]
+    assert commands
+    for command in commands:
+        program, *arguments = command.split()
+        assert program == "python", command
+        done = subprocess.run([sys.executable, *arguments, "--help"], cwd=PROJECT_ROOT, capture_output=True,
+                              text=True, timeout=120)
+        assert done.returncode == 0, f"docs/README.md: {command}: {done.stdout}{done.stderr}"
