@@ -435,6 +435,27 @@ def test_mathml_is_set_as_tex_would() -> None:
     assert weave.to_mathml(r"\Gamma \gamma", display=False).count('mathvariant="normal"') == 1
 
 
+def test_a_font_command_takes_one_token_unbraced_as_tex_does() -> None:
+    """\\mathcal K is \\mathcal{K}: a script K.  Browsers (MathML Core) honour mathvariant="normal" only,
+    so the other fonts are set in Unicode's mathematical letters (latex2mathml gave \\mathcal K as a
+    plain K with mathvariant="script", and \\mathrm{d} as an italic d)."""
+    def tokens(latex: str) -> list[str]:
+        return re.findall(r"<m[ino][^>]*>[^<]*</m[ino]>", weave.to_mathml(latex, display=False))
+
+    for unbraced, braced, expected in [
+            (r"\mathcal K_2", r"\mathcal{K}_2", ["<mi>𝒦</mi>", "<mn>2</mn>"]),
+            (r"\mathbb R^n", r"\mathbb{R}^n", ["<mi>ℝ</mi>", "<mi>n</mi>"]),
+            (r"\mathrm d x", r"\mathrm{d}x", ['<mi mathvariant="normal">d</mi>', "<mi>x</mi>"]),
+            (r"A^\mathrm T", r"A^{\mathrm{T}}", ["<mi>A</mi>", '<mi mathvariant="normal">T</mi>']),
+            (r"\mathbf x", r"\mathbf{x}", ["<mi>𝐱</mi>"]),
+            (r"\mathbf 1", r"\mathbf{1}", ["<mn>𝟏</mn>"]),
+            (r"\boldsymbol x", r"\boldsymbol{x}", ["<mi>𝒙</mi>"]),
+            (r"\mathfrak g \mathit h", r"\mathfrak{g} \mathit{h}", ["<mi>𝔤</mi>", "<mi>ℎ</mi>"])]:
+        assert tokens(unbraced) == tokens(braced) == expected, unbraced
+    assert tokens(r"\mathcal KL") == ["<mi>𝒦</mi>", "<mi>L</mi>"]  # one token, as in TeX
+    assert tokens(r"\mathcal{KL}") == ["<mi>𝒦</mi>", "<mi>ℒ</mi>"]
+
+
 
 def test_png_metadata_is_removed() -> None:
     import matplotlib
