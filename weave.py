@@ -999,7 +999,8 @@ th { background: #f6f8fa; }
 img { max-width: 100%; height: auto; }
 math { font-family: "STIX Two Math", "Latin Modern Math", "Cambria Math", "TeX Gyre Pagella Math",
   "DejaVu Math TeX Gyre", math; font-size: 1.05em; }
-.math-display { overflow-x: auto; overflow-y: hidden; margin: .9em 0; padding: .1em 0; }
+.math-display { max-width: 100%; box-sizing: border-box; overflow-x: auto; overflow-y: hidden; margin: .9em 0;
+  padding: .1em 0; }
 /* a formula or table wider than the column scrolls within itself; a shadow at an edge shows that
    there is more (the covers move with the content, the shadows stay with the box) */
 .math-display, table { background: linear-gradient(to right, #fff 30%, rgba(255, 255, 255, 0)),
