@@ -388,6 +388,10 @@ def test_a_value_of_several_lines_is_markdown_of_its_own(tmp_path, capsys) -> No
     page = read(out, "01-first.html")
     assert '<div class="computed" title="&#x27;| a | b |' in page and "<table>" in page.split("After the table")[0]
     assert "<td>1</td>" in page and page.count("<math ") == 6  # the formula in the table is MathML too
+    cells = json.loads(read(out, "notebooks/01-first.ipynb"))["cells"]
+    markdown = "".join("".join(cell["source"]) for cell in cells if cell["cell_type"] == "markdown")
+    assert "| a | b |\n|---|---|\n| 1 | $x^2$ |\n\nAfter the table." in markdown  # the table, as on the page
+    assert "{python}" not in markdown
     inline = FIRST + "\nIn a sentence: `{python} 'two\\nlines'`.\n"
     (root / "literate" / "01-first.md").write_text(inline, encoding="utf-8")
     assert weave.main(["--root", str(root), "--out", str(out)]) == 1
@@ -544,6 +548,21 @@ def test_the_real_document(real) -> None:
     usage = json.loads(read(real, "notebooks/02-usage.ipynb"))
     outputs = [o for c in usage["cells"] if c["cell_type"] == "code" for o in c["outputs"]]
     assert any("max |R - R_true|" in "".join(o.get("text", "")) for o in outputs)
+
+
+def test_the_notebooks_carry_the_values_the_pages_show(real) -> None:
+    """No inline value is left as `{python} expression` in a notebook's Markdown, and each value the
+    page shows as plain text (no formula in it) is in the notebook's Markdown too."""
+    shown = 0
+    for path in sorted((real / "notebooks").glob("*.ipynb")):
+        cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+        markdown = "\n".join("".join(cell["source"]) for cell in cells if cell["cell_type"] == "markdown")
+        assert tangle.parse_document(markdown, path.name).inline_values() == [], path.name
+        page = read(real, path.stem + ".html")
+        for value in re.findall(r'<span class="computed" title="[^"]*">([^<]*)</span>', page):
+            assert html.unescape(value) in markdown, f"{path.name}: {value!r} is on the page, not in the notebook"
+            shown += 1
+    assert shown >= 50
 
 
 def test_the_woven_document_stays_small(real) -> None:
