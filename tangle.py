@@ -552,8 +552,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--check", action="store_true",
                         help="write nothing; exit 1 if a generated file differs from the literate sources")
-    parser.add_argument("--where", metavar="FILE:LINE", help="print the literate line that produced FILE:LINE (FILE as "
-                        "src/ident/NAME.py, or a path to it, absolute as in a traceback or relative)")
+    parser.add_argument("--where", metavar="FILE:LINE",
+                        help="print the literate line that produced FILE:LINE (FILE as src/ident/NAME.py, "
+                             "or a path to it, absolute as in a traceback or relative)")
     parser.add_argument("--root", type=Path, default=Path(__file__).resolve().parent,
                         help="project root holding literate/ and src/ident/ (default: this file's folder)")
     args = parser.parse_args(argv)

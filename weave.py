@@ -676,11 +676,13 @@ def styled(text: str, variant: str) -> str | None:
 def to_mathml(latex: str, display: bool) -> str:
     """MathML Core for a LaTeX formula, as TeX would set it.
 
-    latex2mathml does the conversion; two things are then adjusted so that browsers set the formula
+    latex2mathml does the conversion; then, so that browsers set the formula
     as TeX does: a delimiter written without \\left/\\right (``\\lVert x \\rVert^2``) keeps its size
     (MathML would stretch it), except around a matrix; the limits of \\min, \\max, ... go under
     the operator in displayed formulas (``movablelimits`` puts them to the side in running text);
-    and capital Greek letters stay upright.
+    capital Greek letters stay upright; and the letters of \\mathcal, \\mathbb, \\mathbf, ... are
+    Unicode's mathematical letters, braced or not (``\\mathcal K`` is ``\\mathcal{K}``), and those of
+    \\mathrm upright.
     """
     import xml.etree.ElementTree as ElementTree
 
@@ -688,7 +690,8 @@ def to_mathml(latex: str, display: bool) -> str:
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        converted = convert(ROMAN_LETTER.sub(r"{\\mathrm \1}", latex.strip()), display="block" if display else "inline")
+        latex = ROMAN_LETTER.sub(r"{\\mathrm \1}", latex.strip())
+        converted = convert(latex, display="block" if display else "inline")
     ElementTree.register_namespace("", MATHML)
     tree = ElementTree.fromstring(converted)
     tag = lambda name: f"{{{MATHML}}}{name}"  # noqa: E731
