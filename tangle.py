@@ -21,6 +21,7 @@ Usage::
     python tangle.py            # write every root chunk to its file
     python tangle.py --check    # exit 1 and name each file that differs from the literate sources
     python tangle.py --where src/ident/hankel.py:42   # which literate line produced that line
+    python tangle.py --where /abs/path/src/ident/hankel.py:42   # the same, from a traceback
 
 The tangler reads UTF-8 (a byte-order mark is allowed), writes only ``.py`` files inside
 ``src/ident/`` and removes only generated files there whose root chunk is gone, and writes all
@@ -518,8 +519,8 @@ def where(root: Path, target: str) -> str:
     name, _, number = target.rpartition(":")
     if not name or not number.isdigit():
         raise TangleError(f"--where expects FILE:LINE, got {target!r}")
+    name = package_file(root, name)
     web = read_web(root)
-    name = Path(name).as_posix()
     if name not in web.pieces:
         raise TangleError(f"{name} is not produced by any root chunk")
     _, locations = render(web, name)
@@ -527,6 +528,20 @@ def where(root: Path, target: str) -> str:
     if not 0 <= index < len(locations):
         raise TangleError(f"{name} has {len(locations)} lines, not {number}")
     return str(locations[index]) if locations[index] else f"{name}:{number} is the generated header"
+
+
+def package_file(root: Path, name: str) -> str:
+    """``src/ident/FILE.py`` for a file named as the project names it, or by a path (absolute, as a
+    traceback prints it, or relative to the current directory) to a file inside ``ROOT/src/ident/``."""
+    given = Path(name)
+    if not given.is_absolute() and given.as_posix().startswith(PACKAGE_DIR + "/") and ".." not in given.parts:
+        return given.as_posix()  # the project's own name for it, whatever the current directory
+    package = (root / PACKAGE_DIR).resolve()
+    path = Path(name).resolve()
+    if not path.is_relative_to(package):
+        raise TangleError(f"--where: {name} is not inside {package}{os.sep}: only the files the tangler "
+                          f"writes there map back to literate/")
+    return PACKAGE_DIR + "/" + path.relative_to(package).as_posix()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -537,7 +552,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--check", action="store_true",
                         help="write nothing; exit 1 if a generated file differs from the literate sources")
-    parser.add_argument("--where", metavar="FILE:LINE", help="print the literate line that produced FILE:LINE")
+    parser.add_argument("--where", metavar="FILE:LINE",
+                        help="print the literate line that produced FILE:LINE (FILE as src/ident/NAME.py, "
+                             "or a path to it, absolute as in a traceback or relative)")
     parser.add_argument("--root", type=Path, default=Path(__file__).resolve().parent,
                         help="project root holding literate/ and src/ident/ (default: this file's folder)")
     args = parser.parse_args(argv)

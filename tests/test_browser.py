@@ -191,38 +191,118 @@ window.addEventListener("load", function () {
     }
     return false;
   }
-  var beyond = [];
+  var beyond = [], formulas = [];
   document.querySelectorAll("main *").forEach(function (e) {
     var box = e.getBoundingClientRect();
     if (box.right > window.innerWidth + 1 && !scrolls(e)) {
       beyond.push(e.tagName.toLowerCase() + ": " + (e.textContent || "").slice(0, 60));
     }
   });
+  document.querySelectorAll("math[display=block]").forEach(function (m) {
+    var box = m.parentElement, style = getComputedStyle(box);
+    formulas.push({text: m.textContent.replace(/\\s+/g, " ").slice(0, 60), width: box.scrollWidth,
+                   column: box.clientWidth, own: box.matches(".math-display") && box.childElementCount === 1,
+                   overflow: style.overflowX, maxWidth: style.maxWidth});
+  });
+  var result = JSON.stringify({beyond: beyond.slice(0, 10), count: beyond.length, formulas: formulas,
+                               page: document.documentElement.scrollWidth, window: window.innerWidth});
+  if (window.parent !== window) { window.parent.postMessage(result, "*"); }
   var out = document.createElement("pre");
   out.id = "width-results";
-  out.textContent = JSON.stringify({beyond: beyond.slice(0, 10), count: beyond.length,
-                                    page: document.documentElement.scrollWidth, window: window.innerWidth});
+  out.textContent = result;
   document.body.appendChild(out);
 });
 </script>"""
 
+# a window of any width: the page in a frame that wide (headless Chromium makes no window under 500 px);
+# the frame passes the page's results up to the document that --dump-dom prints
+FRAME = """<!DOCTYPE html><html><body style="margin:0">
+<iframe src="{page}" style="width:{width}px;height:900px;border:0"></iframe>
+<script>window.addEventListener("message", function (event) {{
+  var out = document.createElement("pre"); out.id = "width-results"; out.textContent = event.data;
+  document.body.appendChild(out);
+}});</script></body></html>"""
 
-@pytest.mark.parametrize("width", [1280, 500])  # 500: the narrowest window headless Chromium makes
-def test_wide_formulas_and_tables_fit_or_scroll_within_themselves(woven, tmp_path_factory, width) -> None:
-    """At a desktop width and a narrow window, nothing makes the page wider than the window: a formula, a
+WIDTHS = (1280, 400)
+
+
+@pytest.fixture(scope="module")
+def widths(woven, tmp_path_factory) -> dict[int, dict[str, dict]]:
+    """Each page's layout at each width of WIDTHS: what runs beyond the window, and the boxes of the
+    display formulas."""
+    profile = tmp_path_factory.mktemp("chromium-width")
+    results: dict[int, dict[str, dict]] = {}
+    for width in WIDTHS:
+        for page in sorted(woven.glob("*.html")):
+            copy, frame = page.with_name(f"width-{page.name}"), page.with_name(f"frame-{page.name}")
+            copy.write_text(page.read_text(encoding="utf-8").replace("</body>", WIDTH_SCRIPT + "\n</body>", 1),
+                            encoding="utf-8")
+            frame.write_text(FRAME.format(page=copy.name, width=width), encoding="utf-8")
+            done = chromium([f"--window-size={width + 20},900", "--virtual-time-budget=5000", "--dump-dom",
+                             frame.as_uri()], profile)
+            copy.unlink()
+            frame.unlink()
+            found = re.search(r'<pre id="width-results">(.*?)</pre>', done.stdout, re.S)
+            assert found, f"{page.name}: no result at width {width}: {done.stderr[-1000:]}"
+            results.setdefault(width, {})[page.name] = json.loads(html.unescape(found[1]))
+            assert results[width][page.name]["window"] == width, "the frame is not as wide as asked"
+    return results
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_wide_formulas_and_tables_fit_or_scroll_within_themselves(widths, width) -> None:
+    """At a desktop width and a phone's, nothing makes the page wider than the window: a formula, a
     table or code wider than the column scrolls within its own box."""
-    profile = tmp_path_factory.mktemp(f"chromium-width-{width}")
-    for page in sorted(woven.glob("*.html")):
-        copy = page.with_name(f"width-{page.name}")
-        copy.write_text(page.read_text(encoding="utf-8").replace("</body>", WIDTH_SCRIPT + "\n</body>", 1),
-                        encoding="utf-8")
-        done = chromium([f"--window-size={width},900", "--virtual-time-budget=5000", "--dump-dom", copy.as_uri()],
-                        profile)
-        copy.unlink()
-        found = re.search(r'<pre id="width-results">(.*?)</pre>', done.stdout, re.S)
-        assert found, f"{page.name}: no result at width {width}: {done.stderr[-1000:]}"
-        result = json.loads(html.unescape(found[1]))
-        assert result["count"] == 0 and result["page"] <= result["window"], f"{page.name} at {width} px: {result}"
+    for page, result in widths[width].items():
+        shown = {k: v for k, v in result.items() if k != "formulas"}
+        assert result["count"] == 0 and result["page"] <= result["window"], f"{page} at {width} px: {shown}"
+
+
+def test_every_display_formula_scrolls_in_its_own_box(widths) -> None:
+    formulas = [(page, f) for page, result in widths[400].items() for f in result["formulas"]]
+    assert formulas, "no display formula found"
+    for page, formula in formulas:
+        assert formula["own"] and formula["overflow"] == "auto" and formula["maxWidth"] == "100%", (page, formula)
+        assert formula["column"] <= 400, (page, formula)
+
+
+def display_formulas(page: str) -> list[tuple[int, str]]:
+    """(line, LaTeX) of each display formula of the literate document of a page, in order."""
+    import weave
+
+    path = PROJECT_ROOT / "literate" / page.replace(".html", ".md")
+    if not path.is_file():
+        return []
+    tokens = weave.make_markdown().parse(path.read_text(encoding="utf-8"))
+    return [(token.map[0] + 1, token.content.strip()) for token in tokens if token.type == "math_block"]
+
+
+# display formulas of today's text wider than the 720 px column at 1280 px (literate file, how the LaTeX
+# starts): the text is to break them into lines; until then they make the check an expected failure
+KNOWN_WIDE = [
+    ("literate/03-examples.md", r"M_i \dot v_i = -K_i (x_i - x_{i-1} - \delta)"),  # Newton's law, 854 px
+    ("literate/10-solver-inner-problem.md", r"\min_{\hat p}\ (p - \hat p)^\top W (p - \hat p)"),  # 754 px
+    ("literate/12-solver-cost.md", r"J^\top J = U^\top V U + B^\top B - A^\top A"),  # 744 px
+]
+
+
+def test_no_display_formula_is_wider_than_its_column(widths) -> None:
+    """At 1280 px no display formula needs its scroll bar: each fits the text column."""
+    wide = []
+    for page, result in widths[1280].items():
+        sources = display_formulas(page)
+        if len(sources) != len(result["formulas"]):  # a formula in a computed value: no line to name
+            sources = [(0, formula["text"]) for formula in result["formulas"]]
+        for (line, latex), formula in zip(sources, result["formulas"]):
+            if formula["width"] > formula["column"] + 1:
+                wide.append((f"literate/{page.replace('.html', '.md')}:{line}", " ".join(latex.split())[:60],
+                             f"{formula['width']} px in {formula['column']} px"))
+    listing = "\n".join("  ".join(entry) for entry in wide)
+    unknown = [entry for entry in wide if not any(entry[0].split(":")[0] == file and entry[1].startswith(start)
+                                                  for file, start in KNOWN_WIDE)]
+    assert unknown == [], "display formulas wider than the column at 1280 px:\n" + listing
+    if wide:
+        pytest.xfail("formulas of the text still to be broken:\n" + listing)
 
 
 def test_screenshots_at_desktop_and_phone_widths(woven, tmp_path_factory) -> None:

@@ -89,6 +89,23 @@ def test_generated_file_names_sources_and_maps_lines_back(tmp_path) -> None:
     assert "# <<more>>= literate/a.md:10" in lines
 
 
+def test_where_takes_the_path_a_traceback_prints(tmp_path, monkeypatch, capsys) -> None:
+    doc = "Text.\n\n" + chunk("<<src/ident/m.py>>=", "a = 1")
+    root = make_project(tmp_path / "project", {"a.md": doc})
+    tangle.write(root, tangle.tangle(root)[0])
+    line = tangle.tangle(root)[0]["src/ident/m.py"].splitlines().index("a = 1") + 1
+    absolute = root.resolve() / "src" / "ident" / "m.py"
+    monkeypatch.chdir(root / "src")
+    for name in ("src/ident/m.py", str(absolute), "ident/m.py", "../src/ident/m.py"):
+        assert tangle.main(["--root", str(root), "--where", f"{name}:{line}"]) == 0, name
+        assert capsys.readouterr().out == "literate/a.md:5\n", name
+    (tmp_path / "elsewhere.py").write_text("a = 1\n")
+    for name in (str(tmp_path / "elsewhere.py"), "../../elsewhere.py", "ident/../../tangle.py"):
+        assert tangle.main(["--root", str(root), "--where", f"{name}:1"]) == 2, name
+        error = capsys.readouterr().err
+        assert f"--where: {name} is not inside {root.resolve() / 'src' / 'ident'}" in error, error
+
+
 def test_examples_and_displays_are_not_tangled(tmp_path) -> None:
     doc = (chunk("<<src/ident/m.py>>=", "a = 1")
            + "```python\n# example: show\nprint(1)\n```\n"

@@ -388,6 +388,10 @@ def test_a_value_of_several_lines_is_markdown_of_its_own(tmp_path, capsys) -> No
     page = read(out, "01-first.html")
     assert '<div class="computed" title="&#x27;| a | b |' in page and "<table>" in page.split("After the table")[0]
     assert "<td>1</td>" in page and page.count("<math ") == 6  # the formula in the table is MathML too
+    cells = json.loads(read(out, "notebooks/01-first.ipynb"))["cells"]
+    markdown = "".join("".join(cell["source"]) for cell in cells if cell["cell_type"] == "markdown")
+    assert "| a | b |\n|---|---|\n| 1 | $x^2$ |\n\nAfter the table." in markdown  # the table, as on the page
+    assert "{python}" not in markdown
     inline = FIRST + "\nIn a sentence: `{python} 'two\\nlines'`.\n"
     (root / "literate" / "01-first.md").write_text(inline, encoding="utf-8")
     assert weave.main(["--root", str(root), "--out", str(out)]) == 1
@@ -433,6 +437,27 @@ def test_mathml_is_set_as_tex_would() -> None:
     matrix = weave.to_mathml(r"\begin{bmatrix} a & b \end{bmatrix}", display=True)
     assert "<mo>[</mo>" in matrix  # brackets around a matrix still stretch
     assert weave.to_mathml(r"\Gamma \gamma", display=False).count('mathvariant="normal"') == 1
+
+
+def test_a_font_command_takes_one_token_unbraced_as_tex_does() -> None:
+    """\\mathcal K is \\mathcal{K}: a script K.  Browsers (MathML Core) honour mathvariant="normal" only,
+    so the other fonts are set in Unicode's mathematical letters (latex2mathml gave \\mathcal K as a
+    plain K with mathvariant="script", and \\mathrm{d} as an italic d)."""
+    def tokens(latex: str) -> list[str]:
+        return re.findall(r"<m[ino][^>]*>[^<]*</m[ino]>", weave.to_mathml(latex, display=False))
+
+    for unbraced, braced, expected in [
+            (r"\mathcal K_2", r"\mathcal{K}_2", ["<mi>𝒦</mi>", "<mn>2</mn>"]),
+            (r"\mathbb R^n", r"\mathbb{R}^n", ["<mi>ℝ</mi>", "<mi>n</mi>"]),
+            (r"\mathrm d x", r"\mathrm{d}x", ['<mi mathvariant="normal">d</mi>', "<mi>x</mi>"]),
+            (r"A^\mathrm T", r"A^{\mathrm{T}}", ["<mi>A</mi>", '<mi mathvariant="normal">T</mi>']),
+            (r"\mathbf x", r"\mathbf{x}", ["<mi>𝐱</mi>"]),
+            (r"\mathbf 1", r"\mathbf{1}", ["<mn>𝟏</mn>"]),
+            (r"\boldsymbol x", r"\boldsymbol{x}", ["<mi>𝒙</mi>"]),
+            (r"\mathfrak g \mathit h", r"\mathfrak{g} \mathit{h}", ["<mi>𝔤</mi>", "<mi>ℎ</mi>"])]:
+        assert tokens(unbraced) == tokens(braced) == expected, unbraced
+    assert tokens(r"\mathcal KL") == ["<mi>𝒦</mi>", "<mi>L</mi>"]  # one token, as in TeX
+    assert tokens(r"\mathcal{KL}") == ["<mi>𝒦</mi>", "<mi>ℒ</mi>"]
 
 
 
@@ -525,9 +550,39 @@ def test_the_real_document(real) -> None:
     assert any("max |R - R_true|" in "".join(o.get("text", "")) for o in outputs)
 
 
+def test_the_notebooks_carry_the_values_the_pages_show(real) -> None:
+    """No inline value is left as `{python} expression` in a notebook's Markdown, and each value the
+    page shows as plain text (no formula in it) is in the notebook's Markdown too."""
+    shown = 0
+    for path in sorted((real / "notebooks").glob("*.ipynb")):
+        cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+        markdown = "\n".join("".join(cell["source"]) for cell in cells if cell["cell_type"] == "markdown")
+        assert tangle.parse_document(markdown, path.name).inline_values() == [], path.name
+        page = read(real, path.stem + ".html")
+        for value in re.findall(r'<span class="computed" title="[^"]*">([^<]*)</span>', page):
+            assert html.unescape(value) in markdown, f"{path.name}: {value!r} is on the page, not in the notebook"
+            shown += 1
+    assert shown >= 50
+
+
 def test_the_woven_document_stays_small(real) -> None:
     size = sum(p.stat().st_size for p in real.rglob("*") if p.is_file())
     assert size < 5_000_000, f"docs/ would be {size / 1e6:.1f} MB"
+
+
+def test_the_commands_in_docs_readme_exist() -> None:
+    """docs/README.md is written by hand (the weave leaves it alone): each command its shell block
+    gives runs (with --help appended, so that nothing is written)."""
+    text = (PROJECT_ROOT / "docs" / "README.md").read_text(encoding="utf-8")
+    commands = [command.strip() for block in re.findall(r"```sh\n(.*?)```", text, re.S)
+                for line in block.splitlines() for command in line.split("&&") if command.strip()]
+    assert commands
+    for command in commands:
+        program, *arguments = command.split()
+        assert program == "python", command
+        done = subprocess.run([sys.executable, *arguments, "--help"], cwd=PROJECT_ROOT, capture_output=True,
+                              text=True, timeout=120)
+        assert done.returncode == 0, f"docs/README.md: {command}: {done.stdout}{done.stderr}"
 
 
 # --------------------------------------------------------------------------------------------
