@@ -8,6 +8,7 @@ import control
 import numpy as np
 import pytest
 
+from conftest import recorded_warnings, warnings_as_errors
 from ident.hankel import block_hankel
 from ident.representations import (IllConditionedWarning, inistate, kernel_to_ss, make_ss,
                                    markov_parameters, normalize_kernel, observability_index,
@@ -231,8 +232,7 @@ def test_singular_and_near_singular_P_ell(m, p, ell):
     Rn[:, ell * q + m:] = -np.diag([1.0] * (p - 1) + [1e-10])
     with pytest.warns(IllConditionedWarning, match=r"condition number .* = [0-9.]+e\+10"):
         kernel_to_ss(Rn, m, ell)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
+    with warnings_as_errors():
         kernel_to_ss(R, m, ell)  # well conditioned: no warning
 
 
@@ -377,8 +377,7 @@ def test_ill_conditioning_warnings_point_at_the_callers_line() -> None:
     from ident.representations import IllConditionedWarning, kernel_to_ss
 
     nearly_singular = np.array([[0.3, 1.0, 1e-10, -1e-10]])  # m = 1, ell = 1: P_1 = 1e-10
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+    with recorded_warnings() as caught:
         kernel_to_ss(nearly_singular, 1, 1)
     assert [w.category for w in caught] == [IllConditionedWarning]
     assert caught[0].filename == __file__

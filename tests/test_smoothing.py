@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from conftest import warnings_as_errors
 from ident import ident, misfit
 from ident import smoothing
 from ident.representations import make_ss, observability_index, simulate
@@ -216,8 +217,7 @@ def test_scaling_the_data_scales_the_misfit_over_the_whole_range(c) -> None:
     model = random_model(rng, 3, 1, 2)
     w = trajectory_of(model, 100, rng) + 0.1 * rng.standard_normal((100, 3))
     M, wh, xini = misfit(w, model)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
+    with warnings_as_errors():
         M_c, wh_c, xini_c = misfit(c * w, model)
     assert M_c == pytest.approx(c ** 2 * M, rel=1e-12)
     np.testing.assert_allclose(wh_c, c * wh, rtol=1e-12, atol=1e-12 * c * np.abs(w).max())

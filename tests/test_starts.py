@@ -214,3 +214,69 @@ def test_subspace_agrees_with_nfoursid(noise):
         assert np.abs(poles - true_poles).max() < 0.05 and np.abs(peer_poles - poles).max() < 0.01
         assert 0 < error < 0.02 * np.abs(truth).max()  # the noise shows, and both estimate the system
         assert np.abs(ours - theirs).max() <= 0.5 * error  # closer to each other than to the truth
+
+
+# --- exact data: the null space to the data's accuracy ------------------------------------------
+
+# The null vector of H_15 of the paper's chain data (reference/msd_uy.txt, columns u, y; rows time-major
+# u(t), y(t), ..., u(t+14), y(t+14)), from the data's doubles in 300-bit arithmetic (mpmath: H H^T
+# formed exactly, its eigenvector of the smallest eigenvalue), rounded to double.
+CHAIN_NULL_VECTOR = np.array([
+    1.4074242990463013e-09, 2.840696865754661e-05, 3.059269222895313e-09, -0.0004284163428218533,
+    -1.7309829299452947e-07, 0.003204688414515046, 1.2247743295493073e-06, -0.015505217657204596,
+    -4.212494819377223e-06, 0.053636006895897245, 7.41123723417739e-06, -0.1393223106774716,
+    -2.13308654697634e-06, 0.278840670285609, -1.968315458562384e-05, -0.4352520151744242,
+    4.492878857870173e-05, 0.531052014274103, -4.47491515887657e-05, -0.5029798589754396,
+    1.7036916080456837e-05, 0.3634532526314955, 4.315656086689624e-06, -0.19404328936364326,
+    -4.0913087983990635e-06, 0.07227524309706453, -1.5715955573077615e-07, -0.016794114052442206,
+    2.4898775886035995e-16, 0.001834939676105505])
+
+
+def chain_problem(ell: int):
+    from conftest import PROJECT_ROOT
+    path = PROJECT_ROOT / "reference" / "msd_uy.txt"
+    if not path.is_file():
+        pytest.skip(f"reference data not found at {path}")
+    w = np.loadtxt(path)
+    return Structure.time_major(2, ell, [len(w) - ell]), w.ravel(order="F"), 2 * (ell + 1) - 1
+
+
+def distance_to(kernel, vector) -> float:
+    unit = kernel.ravel() / np.linalg.norm(kernel)
+    return min(np.linalg.norm(unit - vector), np.linalg.norm(unit + vector))
+
+
+@pytest.mark.parametrize("chunk", [4096, 37])
+def test_the_null_space_of_exact_data_to_their_accuracy(chunk) -> None:
+    # sigma_29 of H_15 is 2e-15 sigma_1: the SVD's null vector may mix that direction in by up to
+    # eps sigma_1 / sigma_29, a few percent (7.6e-5 .. 4.7e-4 here, by BLAS kernel); exact_kernel's
+    # error is that of rounding the 300-bit vector (1e-15 under every kernel tried), asserted to 1e-10
+    structure, p, rank = chain_problem(14)
+    assert distance_to(starts.unstructured_lra(p, structure, rank), CHAIN_NULL_VECTOR) > 1e-6  # what it improves
+    kernel = starts.exact_kernel(p, structure, rank, chunk=chunk)
+    assert kernel.shape == (1, 30) and abs(np.linalg.norm(kernel) - 1) < 1e-14
+    assert distance_to(kernel, CHAIN_NULL_VECTOR) < 1e-10
+
+
+def test_no_kernel_where_the_null_space_of_exact_data_is_not_unique() -> None:
+    structure, p, rank = chain_problem(15)  # lag 15 for data of lag 14: a null space of dimension 2
+    assert starts.exact_kernel(p, structure, rank) is None
+
+
+def test_the_null_space_of_exact_data_with_several_outputs_and_series() -> None:
+    # two outputs (g = 2), two series of different lengths: orthonormal rows that annihilate the data
+    # to rounding (the layout of the g = 2, several-series path; the accuracy is the chain's test above)
+    from ident.representations import random_system, simulate
+    rng = np.random.default_rng(4)
+    system = random_system(1, 2, 2, rng, radius=(0.05, 0.3))
+    series = [np.hstack([u, simulate(system, u, rng.standard_normal(system.nstates))])
+              for u in (rng.standard_normal((200, 1)), rng.standard_normal((150, 1)))]
+    from ident.structure import series_to_parameters
+    structure = Structure.time_major(3, 2, [len(w) - 2 for w in series])
+    p, rank = series_to_parameters(series), 3 * 3 - 2
+    kernel = starts.exact_kernel(p, structure, rank)
+    assert kernel.shape == (2, 9) and np.allclose(kernel @ kernel.T, np.eye(2), atol=1e-14)
+    samples = structure.split(p)
+    hankel = np.hstack([np.array([samples[j][i][lag: lag + n] for i, lag in starts.hankel_rows(structure)])
+                        for j, n in enumerate(structure.n_cols)])  # Phi H(p)
+    assert np.linalg.norm(kernel @ hankel) < 1e-13 * np.linalg.norm(hankel)

@@ -8,6 +8,7 @@ import matplotlib
 import numpy as np
 import pytest
 
+from conftest import warnings_as_errors
 from ident import misfit
 from ident.representations import make_ss, p_ell_condition, random_system, simulate
 from ident.validation import (LagChoice, LagCurve, choose_lag, fit_percent, misfit_vs_lag, plot_lag_curves,
@@ -57,8 +58,7 @@ def test_an_unstable_model_gets_0_with_a_reason_and_no_warnings():
     rng = np.random.default_rng(2)
     u = rng.standard_normal((1000, 1))
     y = simulate(random_system(1, 1, 1, rng), u)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
+    with warnings_as_errors():
         exploding = validate(make_ss([[1.8]], [[1.0]], [[1.0]], [[0.0]]), u, y)  # 1.8^999: not simulated
         growing = validate(make_ss([[1.2]], [[1.0]], [[1.0]], [[0.0]]), u, y)  # 1.2^999 = 1e79: simulated
     assert exploding.fit.tolist() == [0.0] and exploding.yh is None
@@ -202,8 +202,7 @@ def test_the_errors_in_variables_misfit_of_validation_data() -> None:
     scaled = validate(model, 1e150 * u_noisy, 1e150 * y)
     assert scaled.eiv_fit == pytest.approx(checked.eiv_fit, rel=1e-12)
     unstable = make_ss([[1.2, 0.0], [0.0, 0.5]], [[1.0], [1.0]], [[1.0, 1.0], [0.0, 1.0]], [[0.0], [0.0]])
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
+    with warnings_as_errors():
         verdict = validate(unstable, u_noisy, y)
     assert verdict.fit.tolist() == [0.0, 0.0] and np.isfinite(verdict.misfit) and 0 <= verdict.eiv_fit <= 100
 

@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from conftest import warnings_as_errors
 from ident import compare, fit_percent, ident, load_model, misfit, resid, validate
 from ident.cli import main
 from ident.reduction import balanced_truncation
@@ -253,8 +254,7 @@ def test_compare_is_validate_per_output_and_over_series() -> None:
 def test_compare_of_a_model_that_cannot_be_simulated_is_zero_with_the_reason() -> None:
     _, w = noisy_data(T=400)
     unstable = make_ss([[2.0]], [[1.0]], [[1.0]], [[0.0]])
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
+    with warnings_as_errors():
         comparison = compare(w, unstable)
     assert comparison.fit.tolist() == [0.0] and "spectral radius 2" in comparison.reason
     comparison.plot()

@@ -199,7 +199,7 @@ def make_ss(A, B, C, D, dt=1, *, inputs=None, outputs=None) -> control.StateSpac
     try:
         model = control.ss(A, B, C, D, dt=dt, inputs=list(inputs) if inputs is not None else m, **names)
         ok = (model.A.shape, model.B.shape, model.C.shape, model.D.shape) == ((n, n), (n, m), (p, n), (p, m))
-    except control.ControlDimension:
+    except (control.ControlDimension, ValueError):  # 0.10.0 raises ValueError where 0.10.2 raises ControlDimension
         ok = False
     if not ok:  # the (1, 0) quirk: build with one dummy input, then drop it
         model = control.ss(A, np.zeros((n, max(m, 1))), C, np.zeros((p, max(m, 1))), dt=dt, **names)

@@ -251,7 +251,7 @@ class CholeskyFactor:
             if rhs.ndim == 2 and rhs.shape[1] >= VARYING_MIN_COLUMNS and self.n_block_diagonals >= 1:
                 return solve_many(self.band, rhs, trans, self.n_eqs)
             return banded_solve(self.band, rhs, trans, overwrite)
-        x = np.array(rhs, dtype=float, order="F", copy=None if overwrite else True)
+        x = np.asarray(rhs, dtype=float, order="F") if overwrite else np.array(rhs, dtype=float, order="F")
         columns = x.reshape((len(x), -1), order="F")  # a view, (gK, N)
         n_rhs, u = columns.shape[1], self.band.shape[0] - 1
         begin = part.stop - part.n_blocks() * part.nb  # the blocked rows: begin .. part.stop - 1
