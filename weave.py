@@ -1199,14 +1199,15 @@ class PageRenderer:
     def repository_href(self, path: str) -> str | None:
         """The link from the woven pages to a file of the repository, or None where there is none (a
         reader of the pages in a clone opens it; a folder, or a path that does not exist, stays text).
-        A path under docs/ is one of the woven document's own files."""
-        inside_docs = path.startswith("docs/")  # the woven document itself, wherever it is written
-        target = (self.weave.out / path.removeprefix("docs/")) if inside_docs else self.weave.root / path
-        if inside_docs:  # daisy/ is the one folder the pages read rather than write
-            target = self.weave.root / path if not target.is_file() else target
+        Relative to the repository's docs/, where the pages live, whatever folder this weave writes (so
+        that two weaves write the same bytes)."""
+        docs = self.weave.root / "docs"
+        target = self.weave.root / path
+        if path.startswith("docs/") and (self.weave.out / path.removeprefix("docs/")).is_file():
+            target = docs / path.removeprefix("docs/")  # one of the files this weave writes
         if not target.is_file():
             return None
-        return Path(os.path.relpath(target, self.weave.out)).as_posix()
+        return Path(os.path.relpath(target, docs)).as_posix()
 
     def reference(self, match: re.Match, where: str, code: bool = False) -> str:
         """The HTML of a citation, a reference to a label, or a mention of a document or a file."""
