@@ -136,9 +136,9 @@ def tex(value: float, digits: int = 2) -> str:
 
 
 def _power_of_ten(bound: float, text: bool) -> str:
-    if not text:
-        return f"{bound:.0e}".replace("e-0", "e-").replace("e+0", "e+")
     mantissa, exponent = f"{bound:.0e}".split("e")
+    if not text:
+        return f"{mantissa}e{int(exponent)}"
     if -3 <= int(exponent) <= 4 or mantissa != "1":
         return tex(bound, 1)
     return f"$10^{{{int(exponent)}}}$"
