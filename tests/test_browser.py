@@ -280,15 +280,6 @@ def display_formulas(page: str) -> list[tuple[int, str]]:
     return [(token.map[0] + 1, token.content.strip()) for token in tokens if token.type == "math_block"]
 
 
-# display formulas of today's text wider than the 720 px column at 1280 px (literate file, how the LaTeX
-# starts): the text is to break them into lines; until then they make the check an expected failure
-KNOWN_WIDE = [
-    ("literate/03-examples.md", r"M_i \dot v_i = -K_i (x_i - x_{i-1} - \delta)"),  # Newton's law, 854 px
-    ("literate/10-solver-inner-problem.md", r"\min_{\hat p}\ (p - \hat p)^\top W (p - \hat p)"),  # 754 px
-    ("literate/12-solver-cost.md", r"J^\top J = U^\top V U + B^\top B - A^\top A"),  # 744 px
-]
-
-
 def test_no_display_formula_is_wider_than_its_column(widths) -> None:
     """At 1280 px no display formula needs its scroll bar: each fits the text column."""
     wide = []
@@ -301,11 +292,7 @@ def test_no_display_formula_is_wider_than_its_column(widths) -> None:
                 wide.append((f"literate/{page.replace('.html', '.md')}:{line}", " ".join(latex.split())[:60],
                              f"{formula['width']} px in {formula['column']} px"))
     listing = "\n".join("  ".join(entry) for entry in wide)
-    unknown = [entry for entry in wide if not any(entry[0].split(":")[0] == file and entry[1].startswith(start)
-                                                  for file, start in KNOWN_WIDE)]
-    assert unknown == [], "display formulas wider than the column at 1280 px:\n" + listing
-    if wide:
-        pytest.xfail("formulas of the text still to be broken:\n" + listing)
+    assert wide == [], "display formulas wider than the column at 1280 px:\n" + listing
 
 
 def test_screenshots_at_desktop_and_phone_widths(woven, tmp_path_factory) -> None:
