@@ -342,16 +342,16 @@ def test_results_hold_no_iterations_or_seconds_and_numbers_at_the_printed_digits
     checked = 0
     for entry in document["sets"]:
         for mode in entry["modes"].values():
-            for number in [mode] + [c for c in mode["candidates"] if "error" not in c]:
+            numbers = [(mode, daisy_runner.DIGITS)] + [(c, daisy_runner.CANDIDATE_DIGITS) for c in mode["candidates"]
+                                                         if "error" not in c]
+            for number, table in numbers:
                 assert "iterations" not in number and "seconds" not in number
-                for field, digits in daisy_runner.DIGITS.items():
-                    if field not in number:
-                        continue
+                for field, digits in table.items():
                     kept = number["digits"].get(field, digits.standard)
                     values = number[field] if isinstance(number[field], list) else [number[field]]
                     kept = kept if isinstance(kept, list) else [kept] * len(values)
                     for value, places in zip(values, kept):
-                        assert places in (digits.standard, digits.coarse), (entry["name"], field)
+                        assert places in (digits.standard, digits.flat), (entry["name"], field)
                         assert value == _rounded(value, digits.kind, places), (entry["name"], field)
                         checked += 1
     assert checked > 50
@@ -367,15 +367,29 @@ def test_results_hold_no_iterations_or_seconds_and_numbers_at_the_printed_digits
 
 
 def test_the_digits_printed():
-    printed, fit, misfit = daisy_runner.printed, daisy_runner.DIGITS["fit"], daisy_runner.DIGITS["misfit"]
-    assert printed([63.8467, 63.8467 + 1e-12, 63.8467], fit) == (63.8, 1)  # the same to rounding: 0.1
-    assert printed([63.8467, 63.8539, 63.8510], fit) == (60.0, -1)  # a flat valley: tens
-    assert printed([29.36, 29.60, 29.4], fit) == (30.0, -1)
-    assert printed([0.0, 0.0, 0.0], fit) == (0.0, 1)
-    assert printed([1.5, float("nan"), 1.5], fit) == (0.0, -1)  # a failed replay: the coarse digits
-    assert printed([7076867.41, 7076867.29, 7076867.35], misfit) == (7076900.0, 5)  # agree to 2e-8
-    assert printed([837.986, 837.979, 837.992], misfit) == (None, None)  # not printed
-    assert printed([5.0251, 5.0288, 5.026], daisy_runner.DIGITS["spectral_radius"]) == (5.0, 2)
+    chosen = daisy_runner.representative
+
+    def run(misfit, fit, start="lra"):
+        return {"misfit": misfit, "fit": fit, "start": start}
+    # the run and its replays agree: the run's numbers with the standard digits
+    assert chosen([run(2.5, 63.8467), run(2.5 * (1 + 1e-12), 63.8467 + 1e-9), run(2.5, 63.8468)]) == 0
+    # in a flat valley (no two agree to rounding) None: the flat digits
+    assert chosen([run(1149438.1, 63.847), run(1149438.3, 63.854), run(1149438.2, 63.851)]) is None
+    assert chosen([run(837.986, 48.46), run(837.979, 48.46), run(837.991, 48.46)]) is None
+    assert chosen([run(2.5, 1.0), run(2.5, 1.0, "arx"), run(2.5, 1.0, "subspace")]) is None  # the kept start differs
+    # one replay took another path, two reached one minimum: theirs
+    assert chosen([run(90.59236, 48.66), run(90.59317, 48.657), run(90.59236, 48.66)]) == 0
+    assert chosen([run(90.59317, 48.657), run(90.59236, 48.66), run(90.59236, 48.66)]) == 1
+    assert chosen([run(2.5, 1.0), {"start": None}, {"start": None}]) is None  # failed replays agree with nothing
+    numbers = {"misfit": 7076867.41, "fit": 29.36, "fit_per_output": [29.0, 29.72], "fit_overall": 1.0,
+               "fit_identification": 79.31, "spectral_radius": 0.44340028, "p_ell_condition": 23456.0}
+    shown, reduced = daisy_runner.printed_numbers(numbers, daisy_runner.DIGITS, False)
+    assert shown == {"misfit": 7076900.0, "fit": 29.4, "fit_per_output": [29.0, 29.7], "fit_overall": 1.0,
+                     "fit_identification": 79.3, "spectral_radius": 0.4434, "p_ell_condition": 23000.0} and not reduced
+    shown, reduced = daisy_runner.printed_numbers(numbers, daisy_runner.DIGITS, True)
+    assert shown == {"misfit": None, "fit": 30.0, "fit_per_output": [None, None], "fit_overall": None,
+                     "fit_identification": None, "spectral_radius": 0.44, "p_ell_condition": None}
+    assert reduced["misfit"] is None and reduced["fit"] == -1 and reduced["fit_per_output"] == [None, None]
     w = np.linspace(-3, 3, 40).reshape(20, 2)
     changed = daisy_runner.last_bit_changed(w)
     assert np.all(changed != w) and np.all(np.abs(changed - w) <= np.spacing(np.abs(w)))  # one unit in the last place
