@@ -368,3 +368,24 @@ def test_a_result_worse_than_the_model_y_0_is_not_converged(monkeypatch) -> None
     assert trivial_misfit(w, [None, None], 1, (0,)) == pytest.approx(output_energy, rel=1e-12)
     assert trivial_misfit(w, [None, None], 1, (1,)) == np.inf  # an exact output: y = 0 cannot match it
     assert trivial_misfit(w, [np.ones((3, 2)), None], 1, ()) == np.inf  # given initial outputs not zero
+
+
+def test_refine_continues_every_candidate_to_its_local_minimum() -> None:
+    # refine: each candidate continued from where it met tol, with the tighter tolerance; the rule then
+    # chooses among those, and the iterations of both passes are counted
+    rng = np.random.default_rng(7)
+    system = random_system(1, 1, 3, rng)
+    u = rng.standard_normal((80, 1))
+    w = np.hstack([u, simulate(system, u)])
+    w = w + 0.3 * np.linalg.norm(w) * rng.standard_normal(w.shape) / np.sqrt(w.size)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _, loose, _, _ = ident(w, 1, 3, tol=1e-2)
+        _, tight, _, _ = ident(w, 1, 3, tol=1e-2, refine=1e-12)
+    assert [c.start for c in tight.candidates] == [c.start for c in loose.candidates]
+    for before, after in zip(loose.candidates, tight.candidates):
+        if not before.error:
+            assert after.misfit <= before.misfit * (1 + 1e-12) and after.iterations >= before.iterations
+    assert tight.converged and tight.M == next(c.misfit for c in tight.candidates if c.start == tight.start)
+    with pytest.raises(ValueError, match="refine must be a finite positive number"):
+        ident(w, 1, 3, refine=0)

@@ -377,8 +377,8 @@ def command_daisy(args) -> int:
     means = daisy_report.mean_fits(results)
     print("mean validation fit over", len(results), "sets: " + ", ".join(
         f"{daisy_runner.MODES[mode]} {value:.1f} %" for mode, value in means.items()))
-    seconds = sum(x.seconds for r in results for x in r.modes.values())
-    print(f"identification took {seconds:.1f} s (per set, mode and start: {paths['log']})")
+    seconds = sum(x.seconds + x.replay_seconds for r in results for x in r.modes.values())
+    print(f"identification took {seconds:.1f} s with the replays (per set, mode and start: {paths['log']})")
     print("wrote " + ", ".join(str(path) for path in paths.values()))
     return 0
 
