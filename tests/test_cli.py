@@ -5,6 +5,7 @@ import json
 import os
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -408,3 +409,282 @@ def test_daisy_on_two_workers_writes_the_serial_files(tmp_path, capsys):
     assert status == 0, err
     for name in ("table.md", "table.csv", "results.json", "figure1.png"):
         assert (tmp_path / "serial" / name).read_bytes() == (tmp_path / "dask" / name).read_bytes(), name
+
+
+# --- output files (issue 32): never an input, never half written, never a temporary file left ---------
+
+IDENTIFY = ["--inputs", "u1,u2", "--outputs", "y", "--lag", 1]
+
+
+def snapshot(folder: Path) -> dict:
+    """Every entry under `folder` with its kind and bytes (links as their target), to compare before and after."""
+    entries = {}
+    for path in sorted(folder.rglob("*")):
+        if path.is_symlink():
+            entries[str(path)] = ("link", os.readlink(path))
+        elif path.is_file():
+            entries[str(path)] = ("file", path.read_bytes(), oct(path.stat().st_mode))
+        else:
+            entries[str(path)] = ("other", path.stat().st_mode)
+    return entries
+
+
+def refused_before_writing(argv, capsys, folder: Path, *words: str) -> None:
+    before = snapshot(folder)
+    status, out, err = run(argv, capsys)
+    assert status == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert all(word in err for word in words), err
+    assert snapshot(folder) == before
+
+
+def fake_daisy_folder(tmp_path: Path) -> Path:
+    """A data folder holding a file named as DAISY's erie.dat (only compared, never read)."""
+    folder = tmp_path / "daisy-data"
+    folder.mkdir()
+    (folder / "erie.dat").write_text("1 2 3\n")
+    return folder
+
+
+@pytest.mark.parametrize("case", ["model is the data", "model is the npz data", "plot is the data",
+                                  "model through ..", "model is a link to the data", "model is a hard link to the data",
+                                  "plot is a link to the data"])
+def test_identify_never_writes_over_its_data(case, data_csv, tmp_path, capsys):
+    data, option, output = data_csv, "--model", data_csv
+    if case == "model is the npz data":
+        data = output = npz_data(tmp_path)
+    elif case == "plot is the data":
+        data = output = data_csv.rename(tmp_path / "plant.svg")
+        option = "--plot"
+    elif case == "model through ..":
+        (tmp_path / "sub").mkdir()
+        output = tmp_path / "sub" / ".." / data_csv.name
+    elif case in ("model is a link to the data", "plot is a link to the data"):
+        output = tmp_path / ("link.json" if case.startswith("model") else "link.png")
+        output.symlink_to(data_csv)
+        option = "--model" if case.startswith("model") else "--plot"
+    elif case == "model is a hard link to the data":
+        output = tmp_path / "hard.json"
+        os.link(data_csv, output)
+    columns = [] if data.suffix == ".npz" else IDENTIFY[:4]
+    refused_before_writing(["identify", data, *columns, "--lag", 1, option, output], capsys, tmp_path,
+                           f"{option}: {output} is the data file {data}", "nothing was written")
+
+
+@pytest.mark.parametrize("link", [False, True])
+def test_identify_refuses_one_file_for_model_and_plot(link, data_csv, tmp_path, capsys):
+    model = plot = tmp_path / "out.svg"
+    if link:  # a link to a file not yet written is the same file too
+        plot = tmp_path / "fit.svg"
+        plot.symlink_to(model)
+    refused_before_writing(["identify", data_csv, *IDENTIFY, "--model", model, "--plot", plot], capsys, tmp_path,
+                           "--model and --plot name the same file", "nothing was written")
+
+
+def test_lag_never_writes_its_plot_over_its_data(data_csv, tmp_path, capsys):
+    data = data_csv.rename(tmp_path / "plant.png")
+    refused_before_writing(["lag", data, "--inputs", "0:2", "--outputs", "y", "--plot", data], capsys, tmp_path,
+                           f"--plot: {data} is the data file {data}")
+    link = tmp_path / "lag.png"
+    link.symlink_to(data)
+    refused_before_writing(["lag", data, "--inputs", "0:2", "--outputs", "y", "--plot", link], capsys, tmp_path,
+                           f"--plot: {link} is the data file {data}")
+
+
+def test_lag_and_daisy_never_write_over_a_daisy_file(tmp_path, capsys):
+    data_dir = fake_daisy_folder(tmp_path)
+    link = tmp_path / "erie.png"
+    link.symlink_to(data_dir / "erie.dat")
+    refused_before_writing(["lag", "erie", "--data-dir", data_dir, "--no-download", "--plot", link], capsys, tmp_path,
+                           f"--plot: {link} is the DAISY file of erie")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "table.csv").symlink_to(data_dir / "erie.dat")
+    refused_before_writing(["daisy", "erie", "--data-dir", data_dir, "--no-download", "--quiet", "--out", out], capsys,
+                           tmp_path, f"--out: {out / 'table.csv'} is the DAISY file of erie")
+
+
+@pytest.mark.parametrize("command", ["identify", "lag", "daisy"])
+def test_an_output_that_is_a_fifo_or_a_folder_is_not_replaced(command, data_csv, tmp_path, capsys):
+    fifo = tmp_path / ("results" if command == "daisy" else "out.png")
+    os.mkfifo(fifo if command != "daisy" else tmp_path / "table.md")
+    if command == "identify":
+        argv = ["identify", data_csv, *IDENTIFY, "--model", fifo, "--plot", tmp_path / "fit.png"]
+    elif command == "lag":
+        argv = ["lag", data_csv, "--inputs", "0:2", "--outputs", "y", "--plot", fifo]
+    else:
+        argv = ["daisy", "erie", "--quiet", "--out", tmp_path]
+        fifo = tmp_path / "table.md"
+    refused_before_writing(argv, capsys, tmp_path, f"{fifo} is not a regular file (a FIFO, device or socket)")
+    (tmp_path / "folder.json").mkdir()
+    if command == "identify":
+        refused_before_writing(["identify", data_csv, *IDENTIFY, "--model", tmp_path / "folder.json"], capsys, tmp_path,
+                               "--model: ", "folder.json is a folder")
+
+
+def test_a_read_only_output_is_not_replaced(data_csv, tmp_path, capsys):
+    model = tmp_path / "m.json"
+    model.write_text("kept")
+    model.chmod(0o444)
+    refused_before_writing(["identify", data_csv, *IDENTIFY, "--model", model, "--plot", tmp_path / "fit.png"], capsys,
+                           tmp_path, f"--model: {model} is read-only")
+
+
+def read_only_file_system(monkeypatch, when: str) -> None:
+    """Make the writes fail as on a read-only file system: at once ("before") or after the checks ("after")."""
+    def refuse(*args, **kwargs):
+        raise OSError(30, "Read-only file system", str(args[0]) if args else "")
+
+    if when == "before":
+        monkeypatch.setattr(tempfile, "mkstemp", refuse)
+    else:
+        monkeypatch.setattr(Path, "write_text", lambda self, *a, **k: refuse(self))
+        monkeypatch.setattr(os, "replace", refuse)
+
+
+@pytest.mark.parametrize("when", ["before", "after"])
+def test_a_read_only_file_system_is_one_line_naming_the_target(when, data_csv, tmp_path, capsys, monkeypatch):
+    model, plot = tmp_path / "m.json", tmp_path / "fit.png"
+    model.write_text("previous model")
+    before = snapshot(tmp_path)
+    read_only_file_system(monkeypatch, when)
+    status, _, err = run(["identify", data_csv, *IDENTIFY, "--model", model, "--plot", plot], capsys)
+    monkeypatch.undo()
+    assert status != 0 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert "Read-only file system" in err and (f"--model: cannot write {model}" in err or
+                                                f"--plot: cannot write {plot}" in err), err
+    assert ".partial" not in err and ".ident-" not in err
+    assert snapshot(tmp_path) == before
+
+
+def daisy_results():
+    from ident import daisy_runner
+    model = random_system(1, 1, 1, np.random.default_rng(1))
+    mode = daisy_runner.ModeResult("eiv", "lra", 1.0, 3, 0.1, True, 90.0, [90.0], 90.0, 91.0, 0.5, 2.0, "", [],
+                                   model)
+    return [daisy_runner.SetResult("erie", 1, 57, 5, 2, 1, 40, 17, None, {"eiv": mode})]
+
+
+@pytest.mark.parametrize("new_folder", [False, True])
+def test_daisy_on_a_read_only_file_system_names_out(new_folder, tmp_path, capsys, monkeypatch):
+    from ident import daisy_runner
+    monkeypatch.setattr(daisy_runner, "run_benchmark", lambda *args, **kwargs: daisy_results())
+    out = tmp_path / "new" / "out" if new_folder else tmp_path
+    before = snapshot(tmp_path)
+    read_only_file_system(monkeypatch, "after")
+    monkeypatch.setattr(daisy_runner, "run_benchmark", lambda *args, **kwargs: daisy_results())
+    status, _, err = run(["daisy", "erie", "--quiet", "--out", out], capsys)
+    monkeypatch.undo()
+    assert status != 0 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert f"--out: cannot write {out} (Read-only file system)" in err and ".partial" not in err, err
+    assert snapshot(tmp_path) == before  # no file, no temporary folder, no folder made for nothing
+
+
+def test_daisy_writes_exactly_the_files_it_checked(tmp_path, capsys, monkeypatch):
+    from ident import daisy_runner
+    monkeypatch.setattr(daisy_runner, "run_benchmark", lambda *args, **kwargs: daisy_results())
+    status, out, err = run(["daisy", "erie", "--quiet", "--out", tmp_path / "out"], capsys)
+    assert status == 0, err
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == sorted(cli.DAISY_FILES)
+    assert f"wrote {tmp_path / 'out' / 'table.md'}" in out
+
+
+def test_a_file_not_checked_before_the_run_is_not_moved(tmp_path):
+    from ident import output_files
+    folder = tmp_path / "new"
+
+    def writer(staging):
+        (staging / "table.md").write_text("new")
+        (staging / "unexpected.txt").write_text("?")
+
+    with pytest.raises(RuntimeError, match=r"\['unexpected.txt'\] were written but not checked"):
+        output_files.write_into_folder(folder, "--out", ("table.md",), writer)
+    assert not folder.exists()
+
+
+def test_an_interrupt_while_writing_leaves_the_previous_files(data_csv, tmp_path, capsys, monkeypatch):
+    model, plot = tmp_path / "m.json", tmp_path / "fit.png"
+    model.write_text("previous model"), plot.write_bytes(b"previous plot")
+    before = snapshot(tmp_path)
+
+    def interrupted_plot(path, *args):
+        Path(path).write_bytes(b"half a pl")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_plot_fit", interrupted_plot)
+    status, _, err = run(["identify", data_csv, *IDENTIFY, "--model", model, "--plot", plot], capsys)
+    assert status == 130 and "interrupted" in err
+    assert snapshot(tmp_path) == before
+
+
+def test_an_interrupt_between_the_moves_puts_the_first_file_back(data_csv, tmp_path, capsys, monkeypatch):
+    model, plot = tmp_path / "m.json", tmp_path / "fit.png"
+    model.write_text("previous model"), plot.write_bytes(b"previous plot")
+    before = snapshot(tmp_path)
+    real_replace = os.replace
+
+    def replace(source, target):  # the plot moved into place, then Ctrl-C
+        if Path(target) == model:
+            raise KeyboardInterrupt
+        real_replace(source, target)
+
+    monkeypatch.setattr(os, "replace", replace)
+    status, _, err = run(["identify", data_csv, *IDENTIFY, "--model", model, "--plot", plot], capsys)
+    assert status == 130 and "interrupted" in err
+    assert snapshot(tmp_path) == before
+
+
+def test_a_failed_move_puts_back_a_new_plot_too(data_csv, tmp_path, capsys, monkeypatch):
+    model, plot = tmp_path / "m.json", tmp_path / "fit.png"
+    model.write_text("previous model")  # no plot before: the new one is removed again
+    before = snapshot(tmp_path)
+    real_replace = os.replace
+
+    def replace(source, target):
+        if Path(target) == model:
+            raise OSError(28, "No space left on device")
+        real_replace(source, target)
+
+    monkeypatch.setattr(os, "replace", replace)
+    status, _, err = run(["identify", data_csv, *IDENTIFY, "--model", model, "--plot", plot], capsys)
+    assert status == 2 and f"--model: cannot write {model} (No space left on device); nothing was written" in err
+    assert snapshot(tmp_path) == before
+
+
+def test_an_interrupted_daisy_write_keeps_the_previous_results(tmp_path, capsys, monkeypatch):
+    from ident import daisy_report, daisy_runner
+    monkeypatch.setattr(daisy_runner, "run_benchmark", lambda *args, **kwargs: daisy_results())
+    assert run(["daisy", "erie", "--quiet", "--out", tmp_path], capsys)[0] == 0
+    before = snapshot(tmp_path)
+
+    def interrupted(*args, **kwargs):  # the four tables are written, then Ctrl-C before the run log
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(daisy_report, "run_log", interrupted)
+    status, _, err = run(["daisy", "erie", "--quiet", "--out", tmp_path], capsys)
+    assert status == 130 and snapshot(tmp_path) == before
+
+
+def test_an_output_link_is_written_through_and_permissions_are_kept(data_csv, tmp_path, capsys):
+    elsewhere = tmp_path / "models"
+    elsewhere.mkdir()
+    (elsewhere / "m.json").write_text("previous model")
+    (elsewhere / "m.json").chmod(0o640)
+    link = tmp_path / "m.json"
+    link.symlink_to(elsewhere / "m.json")
+    plot = tmp_path / "fit.png"
+    status, _, err = run(["identify", data_csv, *IDENTIFY, "--model", link, "--plot", plot], capsys)
+    assert status == 0, err
+    assert link.is_symlink() and "A" in json.loads((elsewhere / "m.json").read_text())
+    assert (elsewhere / "m.json").stat().st_mode & 0o777 == 0o640
+    mask = os.umask(0o022)
+    os.umask(mask)
+    assert plot.stat().st_mode & 0o777 == 0o666 & ~mask  # a new file: the umask's, not a temporary file's 0o600
+    assert not [p for p in tmp_path.rglob(".*")]  # no temporary file, no probe, no backup
+
+
+@pytest.mark.parametrize("command", ["identify", "lag"])
+def test_a_data_file_that_is_a_fifo_is_refused_without_blocking(command, tmp_path, capsys):
+    fifo = tmp_path / "data.csv"
+    os.mkfifo(fifo)
+    argv = [command, fifo, "--inputs", 0, "--outputs", 1] + (["--lag", 1] if command == "identify" else [])
+    refused_before_writing(argv, capsys, tmp_path, f"{fifo} is not a regular file (a FIFO, device or socket)")
