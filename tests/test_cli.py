@@ -448,7 +448,8 @@ def fake_daisy_folder(tmp_path: Path) -> Path:
 @pytest.mark.parametrize("case", ["model is the data", "model is the npz data", "plot is the data",
                                   "model through ..", "model is a link to the data", "model is a hard link to the data",
                                   "plot is a link to the data"])
-def test_identify_never_writes_over_its_data(case, data_csv, tmp_path, capsys):
+def test_identify_never_writes_over_its_data(case, data_csv, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # default outputs land in tmp_path, which is compared
     data, option, output = data_csv, "--model", data_csv
     if case == "model is the npz data":
         data = output = npz_data(tmp_path)
@@ -504,7 +505,8 @@ def test_lag_and_daisy_never_write_over_a_daisy_file(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("command", ["identify", "lag", "daisy"])
-def test_an_output_that_is_a_fifo_or_a_folder_is_not_replaced(command, data_csv, tmp_path, capsys):
+def test_an_output_that_is_a_fifo_or_a_folder_is_not_replaced(command, data_csv, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # default outputs land in tmp_path, which is compared
     fifo = tmp_path / ("results" if command == "daisy" else "out.png")
     os.mkfifo(fifo if command != "daisy" else tmp_path / "table.md")
     if command == "identify":
@@ -556,10 +558,10 @@ def test_a_read_only_file_system_is_one_line_naming_the_target(when, data_csv, t
     assert snapshot(tmp_path) == before
 
 
-def daisy_results():
+def daisy_results(fit: float = 90.0):
     from ident import daisy_runner
     model = random_system(1, 1, 1, np.random.default_rng(1))
-    mode = daisy_runner.ModeResult("eiv", "lra", 1.0, 3, 0.1, True, 90.0, [90.0], 90.0, 91.0, 0.5, 2.0, "", [],
+    mode = daisy_runner.ModeResult("eiv", "lra", 1.0, 3, 0.1, True, fit, [fit], fit, 91.0, 0.5, 2.0, "", [],
                                    model)
     return [daisy_runner.SetResult("erie", 1, 57, 5, 2, 1, 40, 17, None, {"eiv": mode})]
 
@@ -567,7 +569,6 @@ def daisy_results():
 @pytest.mark.parametrize("new_folder", [False, True])
 def test_daisy_on_a_read_only_file_system_names_out(new_folder, tmp_path, capsys, monkeypatch):
     from ident import daisy_runner
-    monkeypatch.setattr(daisy_runner, "run_benchmark", lambda *args, **kwargs: daisy_results())
     out = tmp_path / "new" / "out" if new_folder else tmp_path
     before = snapshot(tmp_path)
     read_only_file_system(monkeypatch, "after")
@@ -660,6 +661,7 @@ def test_an_interrupted_daisy_write_keeps_the_previous_results(tmp_path, capsys,
         raise KeyboardInterrupt
 
     monkeypatch.setattr(daisy_report, "run_log", interrupted)
+    monkeypatch.setattr(daisy_runner, "run_benchmark", lambda *args, **kwargs: daisy_results(fit=80.0))
     status, _, err = run(["daisy", "erie", "--quiet", "--out", tmp_path], capsys)
     assert status == 130 and snapshot(tmp_path) == before
 
@@ -683,7 +685,8 @@ def test_an_output_link_is_written_through_and_permissions_are_kept(data_csv, tm
 
 
 @pytest.mark.parametrize("command", ["identify", "lag"])
-def test_a_data_file_that_is_a_fifo_is_refused_without_blocking(command, tmp_path, capsys):
+def test_a_data_file_that_is_a_fifo_is_refused_without_blocking(command, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # default outputs land in tmp_path, which is compared
     fifo = tmp_path / "data.csv"
     os.mkfifo(fifo)
     argv = [command, fifo, "--inputs", 0, "--outputs", 1] + (["--lag", 1] if command == "identify" else [])

@@ -53,7 +53,7 @@ def _check_target(target: Path, path: Path, option: str) -> None:
         raise OutputError(f"{option}: {path} is a folder; give a file name")
     if target.exists() and not target.is_file():
         raise OutputError(f"{option}: {path} is not a regular file (a FIFO, device or socket); it is not replaced")
-    if target.exists() and not os.access(target, os.W_OK):
+    if target.exists() and not (os.access(target, os.W_OK) and target.stat().st_mode & 0o222):  # root has access
         raise OutputError(f"{option}: {path} is read-only; it is not replaced")
 
 
