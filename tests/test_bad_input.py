@@ -2,7 +2,11 @@
 expected and what was given, raised by ident's own checks (not from inside numpy, scipy or control)."""
 from __future__ import annotations
 
+import contextlib
+import json
 import os
+import re
+import threading
 import traceback
 import warnings
 
@@ -12,6 +16,7 @@ import pytest
 
 from conftest import recorded_warnings, warnings_as_errors
 from ident import ident, misfit
+from ident.model_file import MAX_MODEL_FILE_BYTES, load_model, model_document
 from ident.representations import random_system
 from ident.solver import kernel_misfit, slra
 from ident.structure import Structure
@@ -237,6 +242,18 @@ CASES = [
      ValueError, 'series 1 of w has T = 60 samples'),
     ('ell beyond any memory', lambda: ident(np.ones((4_000_100, 1)), 0, 2 * 10**6),
      ValueError, 'ell = 2000000 is too large to solve on this machine'),
+    # -- the command line's model files (issue 32; the files themselves: test_load_model_refuses below) --
+    ('load_model of a number, not a path', lambda: load_model(0),
+     TypeError, 'path must be a path \\(str or os.PathLike\\), got int'),
+    ('load_model of None', lambda: load_model(None),
+     TypeError, 'path must be a path \\(str or os.PathLike\\), got NoneType'),
+    ('model_document of NaN matrices', lambda: model_document(SYS_NAN, np.zeros(1), np.zeros(2)),
+     ValueError, 'A holds non-finite values \\(NaN or inf\\)'),
+    ('model_document of NaN means', lambda: model_document(SYS, np.zeros(1), [0.0, np.inf]),
+     ValueError, 'the outputs means holds non-finite values'),
+    ('model_document of a continuous-time model', lambda: model_document(control.ss(SYS.A, SYS.B, SYS.C, SYS.D),
+                                                                         np.zeros(1), np.zeros(2)),
+     ValueError, 'sample time dt must be a positive finite number .*got 0'),
 ]
 
 
@@ -440,3 +457,115 @@ def test_validation_fits_are_the_same_at_any_scale(scale) -> None:
     np.testing.assert_allclose(scaled.fit, reference.fit, rtol=1e-9)
     np.testing.assert_allclose(per_output, reference.fit, rtol=1e-9)
     np.testing.assert_allclose(scaled.x0 / scale, reference.x0, rtol=1e-8, atol=1e-12)
+
+
+# --- the command line's model files (issue 32): load_model refuses every file that is not a model -----
+
+GOOD_MODEL = {"A": [[0.5]], "B": [[1.0]], "C": [[1.0]], "D": [[0.0]], "dt": 0.1, "inputs": ["u"], "outputs": ["y"],
+              "means": {"inputs": [0.0], "outputs": [1.0]}, "lag": 1}
+
+
+def model_text(**changes) -> str:
+    return json.dumps({**GOOD_MODEL, **changes})
+
+
+MODEL_FILE_CASES = [
+    # not a regular file, or too large: refused from os.stat, before the file is opened
+    ("a FIFO", "fifo", r"model\.json is not a regular file \(a FIFO, device or socket\)"),
+    ("a folder", "folder", r"the model file .*model\.json is a folder, not a file"),
+    ("a device", "/dev/null", r"the model file /dev/null is not a regular file"),
+    ("a huge file", "huge", rf"has {MAX_MODEL_FILE_BYTES + 1} bytes, more than {MAX_MODEL_FILE_BYTES}"),
+    ("a missing file", "missing", r"cannot read the model file .*model\.json: No such file"),
+    # hostile JSON
+    ("nested 100000 deep", "[" * 100_000 + "]" * 100_000, r"model\.json: its JSON is nested too deeply"),
+    ("nested 50 deep in an extra key", model_text(notes=json.loads("[" * 50 + "]" * 50)),
+     r"model\.json nests 51 levels deep; a model file nests at most"),
+    ("an integer of 5000 digits", '{"A": [[' + "7" * 5000 + "]]}", r"model\.json: it holds an integer of 5000 digits"),
+    ("an integer too large for a float", model_text(A=[[10 ** 400]]), r"model\.json: it holds an integer of 401 digits"),
+    ("not UTF-8", b"\xff\xfe{}", r"cannot read the model file .*model\.json"),
+    # non-finite numbers
+    ("NaN in A", model_text(A=[[float("nan")]]), r"model\.json: A holds non-finite values \(NaN or inf\)"),
+    ("inf in D", model_text(D=[[float("inf")]]), r"model\.json: D holds non-finite values"),
+    ("1e999 in C", model_text().replace('"C": [[1.0]]', '"C": [[1e999]]'), r"model\.json: C holds non-finite"),
+    ("NaN in the input means", model_text(means={"inputs": [float("nan")], "outputs": [0.0]}),
+     r"model\.json: means\.inputs holds non-finite values"),
+    ("-inf in the output means", model_text(means={"inputs": [0.0], "outputs": [float("-inf")]}),
+     r"model\.json: means\.outputs holds non-finite values"),
+    # the sample time
+    *[(f"dt {shown}", model_text(dt=value),
+       rf"model\.json: dt must be a positive finite number .*got {re.escape(shown)}$")
+      for shown, value in [("nan", float("nan")), ("inf", float("inf")), ("0", 0), ("-0.1", -0.1),
+                           ("True", True), ("None", None), ("'1'", "1"), ("[1]", [1])]],
+    # nothing coerced or reshaped
+    ("a flat B", model_text(B=[1.0]), r"model\.json does not describe a model: B must be a list of rows of numbers"),
+    ("B as a row instead of a column", model_text(A=[[0.5, 0], [0, 0.5]], B=[[1.0, 1.0]], C=[[1.0, 0.0]]),
+     r"B has shape \(1, 2\), but the names and A give \(2, 1\)"),
+    ("ragged A", model_text(A=[[0.5, 0], [0]]), r"the rows of A have different lengths \[1, 2\]"),
+    ("booleans in A", model_text(A=[[True]]), r"A must be a list of rows of numbers, got \[\[True\]\]"),
+    ("strings in D", model_text(D=[["0"]]), r"D must be a list of rows of numbers"),
+    ("means as a matrix", model_text(means={"inputs": [[0.0]], "outputs": [1.0]}),
+     r"means\.inputs must be a list of numbers"),
+    ("inputs as a string", model_text(inputs="u"), r"inputs must be a list of names \(strings\), got 'u'"),
+    ("means with a key too many", model_text(means={"inputs": [0.0], "outputs": [1.0], "other": []}),
+     r"means must be an object with the keys inputs and outputs"),
+]
+
+
+def written_model_file(folder, kind):
+    """The file of a case: a FIFO, a folder, a sparse file one byte too large, a device, or the content given."""
+    path = folder / "model.json"
+    if isinstance(kind, bytes):
+        path.write_bytes(kind)
+    elif kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "folder":
+        path.mkdir()
+    elif kind == "huge":
+        with open(path, "wb") as file:
+            file.truncate(MAX_MODEL_FILE_BYTES + 1)
+    elif kind.startswith("/dev/"):
+        return kind
+    elif kind != "missing":
+        path.write_text(kind, encoding="utf-8")
+    return path
+
+
+def unblock(path) -> None:
+    """Open a FIFO for writing and close it: a reader blocked on it sees the end of the file."""
+    with contextlib.suppress(OSError):
+        os.close(os.open(path, os.O_WRONLY | os.O_NONBLOCK))
+
+
+@pytest.mark.parametrize("name, kind, words", MODEL_FILE_CASES, ids=[c[0] for c in MODEL_FILE_CASES])
+def test_load_model_refuses(tmp_path, name, kind, words) -> None:
+    path = written_model_file(tmp_path, kind)
+    outcome = {}
+
+    def read() -> None:
+        try:
+            outcome["model"] = load_model(path)
+        except BaseException as error:  # noqa: BLE001 - the test looks at what it was
+            outcome["error"] = error
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    reader.join(20)
+    if reader.is_alive():
+        unblock(path)
+        reader.join(5)
+        pytest.fail(f"load_model blocked on {name}")
+    error = outcome.get("error")
+    assert isinstance(error, ValueError) and not isinstance(error, RecursionError), repr(outcome)
+    assert re.search(words, str(error)), str(error)
+    origin = traceback.extract_tb(error.__traceback__)[-1].filename
+    assert origin.endswith(os.path.join("ident", "model_file.py")), origin
+
+
+def test_load_model_reads_what_model_document_writes(tmp_path) -> None:
+    path = tmp_path / "model.json"
+    path.write_text(json.dumps(model_document(SYS, np.zeros(1), np.ones(2), lag=1)))
+    saved = load_model(path)
+    np.testing.assert_allclose(np.asarray(saved.model.A), np.asarray(SYS.A), rtol=0, atol=1e-15)
+    assert saved.model.dt == 1 and saved.info == {"lag": 1}
+    path.write_text(model_text())
+    assert load_model(path).model.dt == 0.1
