@@ -483,6 +483,7 @@ MODEL_FILE_CASES = [
     ("an integer of 5000 digits", '{"A": [[' + "7" * 5000 + "]]}", r"model\.json: it holds an integer of 5000 digits"),
     ("an integer too large for a float", model_text(A=[[10 ** 400]]), r"model\.json: it holds an integer of 401 digits"),
     ("not UTF-8", b"\xff\xfe{}", r"cannot read the model file .*model\.json"),
+    ("a key given twice", model_text()[:-1] + ', "A": [[0.9]]}', r"model\.json: it gives the key\(s\) 'A' more than once"),
     # non-finite numbers
     ("NaN in A", model_text(A=[[float("nan")]]), r"model\.json: A holds non-finite values \(NaN or inf\)"),
     ("inf in D", model_text(D=[[float("inf")]]), r"model\.json: D holds non-finite values"),
