@@ -145,8 +145,9 @@ def with_missing(frame):
     (lambda w: pd.DataFrame({"force": w[:, 0], "position": w[:, 1].astype(complex)}), TypeError,
      r"non-numeric column\(s\) 'position' \(complex128\)"),
     (lambda w: pd.DataFrame(w, columns=["a", "a"]), ValueError, r"w has the column name\(s\) 'a' more than once"),
-    (lambda w: [frame_of(w), frame_of(w, ("position", "force"))], ValueError,
-     r"w\[1\] has the columns \['position', 'force'\] but w\[0\] has"),
+    (lambda w: [frame_of(w), frame_of(w, ("position", "speed"))], ValueError,
+     r"w\[1\] has the columns \['position', 'speed'\] but w\[0\] has \['force', 'position'\]: w\[1\] lacks "
+     r"'force'; w\[1\] has 'speed', not expected"),
     (lambda w: [frame_of(w), w], TypeError, r"w\[1\] is a ndarray, but w holds DataFrames"),
     (lambda w: with_missing(frame_of(w).astype({"position": "Float64"})), ValueError,
      r"w holds 1 non-finite value\(s\) \(NaN or inf, or masked\), the first at sample 5, variable 1"),
