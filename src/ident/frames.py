@@ -98,7 +98,7 @@ def regular_step(times: np.ndarray, index, label: str, unit: str = "", rounding:
     uneven = np.flatnonzero(np.abs(steps - step) > tolerance)
     if uneven.size:
         k = int(uneven[0])
-        raise ValueError(f"{label}'s index is not equally spaced: from {index[k]} (row {k}) to {index[k + 1]} is "
+        raise ValueError(f"{label}'s index is not equally spaced: from {index[k]} (row {k}) to {index[k + 1]} (row {k + 1}) is "
                          f"{steps[k] / per_unit:.6g}{unit}, but its spacing is {step / per_unit:.6g}{unit}"
                          f"{' (missing samples?)' if steps[k] > step else ''}; ident takes equally spaced samples "
                          "and does not resample: resample the data, split them into series at the gap, or give "
