@@ -47,9 +47,9 @@ def index_spacing(index, label: str) -> Spacing | None:
         return Spacing(ticks / per_second, "s")  # a nanosecond of rounding allowed above
     if isinstance(index, pandas.PeriodIndex):
         check_no_missing_times(index, label)
-        periods = regular_step(np.asarray(index.asi8, dtype=float), index, label, " periods")
+        ordinals = regular_step(np.asarray(index.asi8, dtype=float), index, label)  # counts of the base unit
         seconds = fixed_seconds(index.freq)
-        return None if seconds is None else Spacing(periods * seconds, "s")
+        return None if seconds is None else Spacing(ordinals * seconds, "s")
     kind = getattr(index.dtype, "kind", "O")
     if kind in "iu":
         check_no_missing_times(index, label)
@@ -72,9 +72,9 @@ def check_no_missing_times(index, label: str) -> None:
 
 
 def fixed_seconds(frequency) -> float | None:
-    """The duration of a period of fixed length in seconds (None for months, business days, ...)."""
+    """The duration in seconds of the base unit of a fixed frequency ("s" of "2s"; None for months, ...)."""
     try:
-        return frequency.nanos / 1e9
+        return frequency.nanos / frequency.n / 1e9
     except (AttributeError, TypeError, ValueError):
         return None
 
