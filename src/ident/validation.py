@@ -209,13 +209,13 @@ def validate(sys, u, y) -> Validation:
     """
     if not is_state_space(sys) or not sys.isdtime(strict=True):
         raise TypeError(f"sys must be a discrete-time control.StateSpace, got {type(sys).__name__}")
-    named = not has_default_names(sys)  # a named model's DataFrames are matched by name, as in compare
+    unnamed = has_default_names(sys)  # a named model's DataFrames are matched by name, as in compare
     y = _as_outputs(_in_order(y, list(map(str, sys.output_labels)), "y", f"the outputs of sys, "
-                              f"{list(sys.output_labels)}", sys, positional=not named), "y")
+                              f"{list(sys.output_labels)}", sys, positional=unnamed), "y")
     n_samples = y.shape[0]
     u = np.zeros((n_samples, 0)) if u is None else real_array(_in_order(
         u, list(map(str, sys.input_labels)), "u", f"the inputs of sys, {list(sys.input_labels)}", sys,
-        positional=not named), "u")
+        positional=unnamed), "u")
     u = u[:, None] if u.ndim == 1 else u
     if u.shape != (n_samples, sys.ninputs) or y.shape[1] != sys.noutputs:
         raise ValueError(f"u and y must be T x m and T x p for a model with m = {sys.ninputs} inputs and "
