@@ -570,3 +570,161 @@ def test_load_model_reads_what_model_document_writes(tmp_path) -> None:
     assert saved.model.dt == 1 and saved.info == {"lag": 1}
     path.write_text(model_text())
     assert load_model(path).model.dt == 0.1
+# --- DataFrames: names, not positions, and time indexes (issue 32) ---------------------------------
+
+
+# A frame's column names decide the roles wherever a named model meets it (misfit, compare, resid,
+# validate, fit_percent, misfit_vs_lag's validation, ident's sys0); names are unique as text; a time
+# index (datetime, timedelta, period, float) is checked and gives the sample time; an integer index
+# must count up in equal steps; arrays of times are not data.
+
+import pandas as pd  # noqa: E402  (the test extra has pandas; this block is the only user here)
+
+from ident.representations import make_ss  # noqa: E402
+from ident.validation import compare, fit_percent, misfit_vs_lag, resid, validate  # noqa: E402
+
+NAMED = make_ss(SYS.A, SYS.B, SYS.C, SYS.D, 1, inputs=["force"], outputs=["position", "angle"])
+NAMED_TIMED = make_ss(SYS.A, SYS.B, SYS.C, SYS.D, 0.1, inputs=["force"], outputs=["position", "angle"])
+TWINS = make_ss(SYS.A, SYS.B, SYS.C, SYS.D, 1, inputs=["force"], outputs=["force", "angle"])
+FRAME = pd.DataFrame(W, columns=["force", "position", "angle"])
+RENAMED = FRAME.rename(columns={"angle": "speed"})
+TIMES = pd.date_range("2024-01-01", periods=60, freq="100ms")
+
+
+def timed(index) -> pd.DataFrame:
+    return FRAME.set_axis(index)
+
+
+def with_times_at(rows: dict) -> pd.DatetimeIndex:
+    """TIMES with the given rows replaced."""
+    values = TIMES.to_series().reset_index(drop=True)
+    for row, value in rows.items():
+        values[row] = value
+    return pd.DatetimeIndex(values)
+
+
+SECONDS = 60 * np.arange(180, dtype=np.int64).reshape(60, 3)
+
+FRAME_CASES = [
+    # a named model's signals are the frame's columns, or an error listing what differs
+    ('misfit: columns not the signals of sysh', lambda: misfit(RENAMED, NAMED), ValueError,
+     r"w's columns do not match the signals of sysh: w lacks 'angle'; w has 'speed', not expected"),
+    ('compare: columns not the signals of sys', lambda: compare(RENAMED, NAMED), ValueError,
+     r"w's columns do not match the signals of sys: w lacks 'angle'"),
+    ('resid: columns not the signals of sys', lambda: resid(RENAMED, NAMED), ValueError,
+     r"w's columns do not match the signals of sys: w lacks 'angle'"),
+    ('ident: columns not the signals of sys0', lambda: ident(RENAMED, 1, 1, sys0=NAMED), ValueError,
+     r"w's columns do not match the signals of sys0: w lacks 'angle'"),
+    ('misfit: a column too few', lambda: misfit(FRAME[["force", "position"]], NAMED), ValueError,
+     r"w's columns do not match the signals of sysh: w lacks 'angle'"),
+    ('validate: outputs not the outputs of sys', lambda: validate(NAMED, FRAME[["force"]], RENAMED[["speed", "position"]]),
+     ValueError, r"y's columns do not match the outputs of sys, \['position', 'angle'\]: y lacks 'angle'"),
+    ('validate: inputs not the inputs of sys', lambda: validate(NAMED, RENAMED[["speed"]], FRAME[["position", "angle"]]),
+     ValueError, r"u's columns do not match the inputs of sys, \['force'\]: u lacks 'force'; u has 'speed'"),
+    ('fit_percent: yh not the columns of y', lambda: fit_percent(FRAME[["position", "angle"]], RENAMED[["position", "speed"]]),
+     ValueError, r"yh's columns do not match the columns of y, \['position', 'angle'\]: yh lacks 'angle'"),
+    ('misfit_vs_lag: validation not the columns of w', lambda: misfit_vs_lag(FRAME, 1, [1], validation=RENAMED),
+     ValueError, r"validation's columns do not match the columns of w, \['force', 'position', 'angle'\]"),
+    ('a model with two signals of one name', lambda: misfit(FRAME, TWINS), ValueError,
+     r"sysh gives two of its signals the name\(s\) 'force'"),
+    ('series of frames with other columns', lambda: ident([FRAME, RENAMED], 1, 1), ValueError,
+     r"w\[1\] has the columns .* but w\[0\] has .*: w\[1\] lacks 'angle'; w\[1\] has 'speed', not expected"),
+    # names unique as text
+    ('ident: columns 0 and "0"', lambda: ident(pd.DataFrame(W, columns=[0, "0", 1]), 1, 1), ValueError,
+     r"w has the column name\(s\) '0' \(as 0 and '0'\) more than once"),
+    ('misfit: columns 0 and "0"', lambda: misfit(pd.DataFrame(W, columns=[0, "0", 1]), SYS), ValueError,
+     r"w has the column name\(s\) '0' \(as 0 and '0'\) more than once"),
+    ('compare: columns 0 and "0"', lambda: compare(pd.DataFrame(W, columns=[0, "0", 1]), SYS), ValueError,
+     r"w has the column name\(s\) '0' \(as 0 and '0'\) more than once"),
+    ('a later series with columns 1 and "1"', lambda: ident([FRAME, pd.DataFrame(W, columns=["force", 1, "1"])], 1, 1),
+     ValueError, r"w\[1\] has the column name\(s\) '1' \(as 1 and '1'\) more than once"),
+    ('misfit: a duplicate column name', lambda: misfit(pd.DataFrame(W, columns=["a", "b", "a"]), SYS), ValueError,
+     r"w has the column name\(s\) 'a' more than once"),
+    # the time index: missing, repeated, decreasing, unequally spaced times are refused, naming w
+    ('ident: a gap in the time index', lambda: ident(timed(TIMES.delete(30).append(TIMES[-1:] + TIMES.freq)), 1, 1),
+     ValueError, r"w's index is not equally spaced: from 2024-01-01 00:00:02.900000 \(row 29\) to .* is 0.2 s, "
+                 r"but its spacing is 0.1 s \(missing samples\?\)"),
+    ('misfit: a gap in the time index', lambda: misfit(timed(TIMES.delete(30).append(TIMES[-1:] + TIMES.freq)), SYS),
+     ValueError, r"w's index is not equally spaced"),
+    ('compare: a gap in the time index', lambda: compare(timed(TIMES.delete(30).append(TIMES[-1:] + TIMES.freq)), SYS),
+     ValueError, r"w's index is not equally spaced"),
+    ('resid: a gap in the time index', lambda: resid(timed(TIMES.delete(30).append(TIMES[-1:] + TIMES.freq)), SYS),
+     ValueError, r"w's index is not equally spaced"),
+    ('reversed timestamps', lambda: ident(timed(TIMES[::-1]), 1, 1), ValueError,
+     r"w's index decreases from 2024-01-01 00:00:05.900000 \(row 0\) to .* \(row 1\): the samples must be in time order"),
+    ('one timestamp out of order', lambda: misfit(timed(with_times_at({7: TIMES[3]})), SYS), ValueError,
+     r"w's index decreases from .* \(row 6\) to .* \(row 7\)"),
+    ('constant timestamps', lambda: ident(timed(pd.DatetimeIndex([TIMES[0]] * 60)), 1, 1), ValueError,
+     r"w's index repeats 2024-01-01 00:00:00 at rows 0 and 1 \(duplicate or constant timestamps\)"),
+    ('a duplicate timestamp', lambda: compare(timed(with_times_at({8: TIMES[7]}).sort_values()), SYS), ValueError,
+     r"w's index repeats .* at rows 7 and 8"),
+    ('a missing timestamp (NaT)', lambda: ident(timed(with_times_at({4: pd.NaT})), 1, 1), ValueError,
+     r"w's index has no time at row 4 \(NaT\)"),
+    ('a gap in a timedelta index', lambda: ident(timed(pd.to_timedelta(np.r_[0:30, 31:61], unit="s")), 1, 1),
+     ValueError, r"w's index is not equally spaced: .* is 2 s, but its spacing is 1 s"),
+    ('a gap in a float time index', lambda: ident(timed(pd.Index(np.r_[0:30, 31:61] * 0.1, name="t")), 1, 1),
+     ValueError, r"w's index is not equally spaced: from 2.9\d* \(row 29\) to 3.1 \(row 30\) is 0.2"),
+    ('a NaN in a float time index', lambda: ident(timed(pd.Index(np.where(np.arange(60) == 5, np.nan, np.arange(60.0)))), 1, 1),
+     ValueError, r"w's index has no time at row 5"),
+    ('a gap in a period index', lambda: ident(timed(pd.period_range("2024-01-01", periods=61, freq="s").delete(9)), 1, 1),
+     ValueError, r"w's index is not equally spaced: .* \(row 9\) is 2, but its spacing is 1 \(missing"),
+    ('reversed rows (RangeIndex)', lambda: ident(FRAME.iloc[::-1], 1, 1), ValueError,
+     r"w's index decreases from 59 \(row 0\) to 58 \(row 1\)"),
+    ('a dropped row (integer index)', lambda: misfit(FRAME.drop(index=[12]), SYS), ValueError,
+     r"w's index is not equally spaced: from 11 \(row 11\) to 13 \(row 12\) is 2, but its spacing is 1"),
+    ('series glued together (repeated sample numbers)', lambda: ident(pd.concat([FRAME, FRAME]), 1, 1), ValueError,
+     r"w's index decreases from 59 \(row 59\) to 0 \(row 60\)"),
+    ('a gap in the second series', lambda: ident([timed(TIMES), timed(TIMES.delete(3).append(TIMES[-1:] + TIMES.freq))], 1, 1),
+     ValueError, r"w\[1\]'s index is not equally spaced"),
+    ('series of two sample times', lambda: ident([timed(TIMES), timed(pd.date_range("2024", periods=60, freq="200ms"))], 1, 1),
+     ValueError, r"w\[1\]'s index is spaced 0.2 s but w\[0\]'s 0.1 s: the series of w must have one sample time"),
+    ('validation with reversed times', lambda: misfit_vs_lag(FRAME, 1, [1], validation=FRAME.iloc[::-1]),
+     ValueError, r"validation's index decreases"),
+    ('validate: outputs with a gap in time', lambda: validate(NAMED, FRAME[["force"]], FRAME[["position", "angle"]].drop(index=[3])),
+     ValueError, r"y's index is not equally spaced"),
+    # a sample time that contradicts the index's spacing
+    ('dt contradicts the time index', lambda: ident(timed(TIMES), 1, 1, dt=1.0), ValueError,
+     r"dt = 1.0 contradicts the index of w, spaced 0.1 s"),
+    ('dt contradicts a float time index', lambda: ident(timed(pd.Index(0.5 * np.arange(60))), 1, 1, dt=0.1), ValueError,
+     r"dt = 0.1 contradicts the index of w, spaced 0.5 \(in the index's unit\)"),
+    ('sys0 of another sample time', lambda: ident(timed(TIMES), 1, 1, sys0=make_ss(SYS.A, SYS.B, SYS.C, SYS.D, 1.0)),
+     ValueError, r"sys0 has dt = 1.0 but the index of w is spaced 0.1 s"),
+    ('misfit: sysh of another sample time', lambda: misfit(timed(pd.date_range("2024", periods=60, freq="1s")), NAMED_TIMED),
+     ValueError, r"sysh has the sample time dt = 0.1, but the index of w is spaced 1 s"),
+    ('compare: sys of another sample time', lambda: compare(timed(pd.date_range("2024", periods=60, freq="1s")), NAMED_TIMED),
+     ValueError, r"sys has the sample time dt = 0.1, but the index of w is spaced 1 s"),
+    ('resid: sys of another sample time', lambda: resid(timed(pd.date_range("2024", periods=60, freq="1s")), NAMED_TIMED),
+     ValueError, r"sys has the sample time dt = 0.1, but the index of w is spaced 1 s"),
+    # arrays of times are not data (numpy would convert them to numbers silently)
+    ('ident: timedelta64 w', lambda: ident(SECONDS.astype("m8[s]"), 1, 1), TypeError,
+     r"w must hold real numbers, got dtype timedelta64\[s\] \(times are not data"),
+    ('ident: datetime64 w', lambda: ident(SECONDS.astype("M8[s]"), 1, 1), TypeError,
+     r"w must hold real numbers, got dtype datetime64\[s\] \(times are not data"),
+    ('ident: a timedelta64 series in a list', lambda: ident([W, SECONDS.astype("m8[ms]")], 1, 1), TypeError,
+     r"w\[1\] must hold real numbers, got dtype timedelta64\[ms\]"),
+    ('ident: a masked timedelta64 w', lambda: ident(np.ma.masked_array(SECONDS.astype("m8[s]"), mask=MASK), 1, 1),
+     TypeError, r"w must hold real numbers, got a masked array of dtype timedelta64"),
+    ('misfit: timedelta64 w', lambda: misfit(SECONDS.astype("m8[s]"), SYS), TypeError,
+     r"w must hold real numbers, got dtype timedelta64"),
+    ('compare: timedelta64 w', lambda: compare(SECONDS.astype("m8[s]"), SYS), TypeError,
+     r"w must hold real numbers, got dtype timedelta64"),
+    ('timedelta64 wini', lambda: ident(W, 1, 1, wini=[np.zeros((1, 3), dtype="m8[s]")]), TypeError,
+     r"wini\[0\] must hold real numbers, got dtype timedelta64"),
+    ('timedelta64 exct', lambda: ident(W, 1, 1, exct=np.array([0], dtype="m8[s]")), TypeError,
+     r"exct must be a sequence of variable indices"),
+    ('timedelta64 sys0 kernel', lambda: ident(W, 1, 1, sys0=np.eye(2, 6).astype("m8[s]")), TypeError,
+     r"sys0 as a kernel parameter R must hold real numbers, got dtype timedelta64"),
+    ('validate: timedelta64 u', lambda: validate(SYS, SECONDS[:, :1].astype("m8[s]"), W[:, 1:]), TypeError,
+     r"u must hold real numbers, got dtype timedelta64"),
+    ('validate: datetime64 y', lambda: validate(SYS, W[:, :1], SECONDS[:, 1:].astype("M8[s]")), TypeError,
+     r"y must hold real numbers, got dtype datetime64"),
+    ('fit_percent: timedelta64 yh', lambda: fit_percent(W[:, 1:], SECONDS[:, 1:].astype("m8[s]")), TypeError,
+     r"yh must hold real numbers, got dtype timedelta64"),
+    ('misfit_vs_lag: timedelta64 validation', lambda: misfit_vs_lag(W, 1, [1], validation=SECONDS.astype("m8[s]")),
+     TypeError, r"validation must hold real numbers, got dtype timedelta64"),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", FRAME_CASES, ids=[c[0] for c in FRAME_CASES])
+def test_bad_frames_and_times_are_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

@@ -145,8 +145,9 @@ def with_missing(frame):
     (lambda w: pd.DataFrame({"force": w[:, 0], "position": w[:, 1].astype(complex)}), TypeError,
      r"non-numeric column\(s\) 'position' \(complex128\)"),
     (lambda w: pd.DataFrame(w, columns=["a", "a"]), ValueError, r"w has the column name\(s\) 'a' more than once"),
-    (lambda w: [frame_of(w), frame_of(w, ("position", "force"))], ValueError,
-     r"w\[1\] has the columns \['position', 'force'\] but w\[0\] has"),
+    (lambda w: [frame_of(w), frame_of(w, ("position", "speed"))], ValueError,
+     r"w\[1\] has the columns \['position', 'speed'\] but w\[0\] has \['force', 'position'\]: w\[1\] lacks "
+     r"'force'; w\[1\] has 'speed', not expected"),
     (lambda w: [frame_of(w), w], TypeError, r"w\[1\] is a ndarray, but w holds DataFrames"),
     (lambda w: with_missing(frame_of(w).astype({"position": "Float64"})), ValueError,
      r"w holds 1 non-finite value\(s\) \(NaN or inf, or masked\), the first at sample 5, variable 1"),
@@ -164,6 +165,94 @@ def test_exct_naming_a_column_that_does_not_exist_is_refused() -> None:
         ident(frame_of(w), 1, 2, exct=["speed"])
     with pytest.raises(TypeError, match=r"column names when w is a DataFrame"):
         ident(w, 1, 2, exct=["force"])
+
+
+# -- DataFrames: names, not positions, and time indexes (issue 32) --------------------------------------
+
+def test_misfit_compare_and_resid_take_a_frames_columns_by_name() -> None:
+    system, w = noisy_data(m=1, p=2, T=300)
+    named = make_ss(system.A, system.B, system.C, system.D, 1, inputs=["force"], outputs=["position", "angle"])
+    frame = pd.DataFrame(w, columns=["force", "position", "angle"])
+    shuffled = frame[["angle", "force", "position"]]  # the columns reordered: the same data
+    M, wh, _ = misfit(frame, named)
+    M_shuffled, wh_shuffled, _ = misfit(shuffled, named)
+    assert abs(M_shuffled - M) <= 1e-10 * M  # by position: the outputs taken as inputs, a misfit far larger
+    assert list(wh_shuffled.columns) == list(shuffled.columns)  # wh comes back in the caller's order
+    assert np.allclose(wh_shuffled[list(frame.columns)].to_numpy(), wh.to_numpy(), atol=1e-10 * np.abs(w).max())
+    assert np.allclose(compare(shuffled, named).fit, compare(frame, named).fit, atol=1e-8)
+    assert compare(shuffled, named).fit.min() > 80
+    assert np.allclose(resid(shuffled, named).autocorrelation, resid(frame, named).autocorrelation, atol=1e-8)
+    M_exact, _, _ = misfit(shuffled, named, exct=["force"])  # exct names: the same variable in any order
+    assert abs(M_exact - misfit(w, named, exct=[0])[0]) <= 1e-10 * M_exact
+    u, y = frame[["force"]], frame[["angle", "position"]]
+    assert np.allclose(validate(named, u, y).fit, validate(named, w[:, :1], w[:, 1:]).fit, atol=1e-8)  # model order
+    assert np.allclose(fit_percent(frame[["position", "angle"]], frame[["angle", "position"]] * 0.9)[0],
+                       fit_percent(w[:, 1:], 0.9 * w[:, 1:])[0], atol=1e-10)
+
+
+def test_an_identified_model_meets_its_data_by_name() -> None:
+    _, w = noisy_data(T=300)
+    frame = frame_of(w)
+    sysh, info, _, _ = ident(frame, 1, 2)
+    reordered = frame[["position", "force"]]
+    assert abs(misfit(reordered, sysh)[0] - info.M) <= 1e-8 * info.M
+    _, info_sys0, _, _ = ident(reordered, 1, 2, sys0=sysh)  # a named sys0 orders the columns: force is the input
+    assert abs(info_sys0.M - info.M) <= 1e-6 * info.M
+
+
+def test_a_model_without_names_takes_a_frame_by_position_unless_the_columns_are_its_names() -> None:
+    system, w = noisy_data()
+    frame = frame_of(w)  # force, position: other names than u[0], y[0]
+    assert abs(misfit(frame, system)[0] - misfit(w, system)[0]) <= 1e-10 * misfit(w, system)[0]
+    by_default_names = pd.DataFrame(w[:, ::-1], columns=["y[0]", "u[0]"])
+    assert abs(misfit(by_default_names, system)[0] - misfit(w, system)[0]) <= 1e-10 * misfit(w, system)[0]
+
+
+def test_series_of_frames_are_matched_by_name() -> None:
+    _, w = noisy_data(T=400)
+    frames = [frame_of(w[:250]), frame_of(w[250:], start=0)]
+    swapped = [frames[0], frames[1][["position", "force"]]]
+    sysh, info, wh, _ = ident(frames, 1, 2)
+    sysh_swapped, info_swapped, wh_swapped, _ = ident(swapped, 1, 2)
+    assert abs(info_swapped.M - info.M) <= 1e-8 * info.M and sysh_swapped.input_labels == ["force"]
+    assert list(wh_swapped[1].columns) == ["position", "force"]
+    assert np.allclose(wh_swapped[1][["force", "position"]].to_numpy(), wh[1].to_numpy(), atol=1e-8 * np.abs(w).max())
+
+
+@pytest.mark.parametrize("index, dt", [
+    (pd.date_range("2024-01-01", periods=300, freq="100ms"), 0.1),
+    (pd.timedelta_range(0, periods=300, freq="20ms"), 0.02),
+    (pd.Index(0.1 * np.arange(300), name="time (s)"), 0.1),
+    (pd.period_range("2024-01-01", periods=300, freq="2s"), 2.0),
+    (pd.period_range("2024-01-01", periods=300, freq="D"), 86400.0),
+    (pd.RangeIndex(5, 305), 1),  # sample numbers: no time, the default dt
+    (pd.Index([f"sample {k}" for k in range(300)]), 1),  # labels: not read
+])
+def test_a_time_index_gives_the_sample_time(index, dt) -> None:
+    _, w = noisy_data(T=300)
+    frame = frame_of(w).set_axis(index)
+    sysh, _, wh, _ = ident(frame, 1, 2)
+    assert abs(sysh.dt - dt) <= 1e-12 * dt and wh.index.equals(frame.index)
+    assert abs(ident(frame, 1, 2, dt=dt)[0].dt - dt) <= 1e-12 * dt  # the spacing asked for is no contradiction
+    assert misfit(frame, sysh)[0] > 0 and compare(frame, sysh).fit[0] > 80
+
+
+def test_a_model_of_unspecified_sample_time_meets_any_time_index() -> None:
+    system, w = noisy_data()
+    unspecified = make_ss(system.A, system.B, system.C, system.D, True)
+    frame = frame_of(w).set_axis(pd.date_range("2024", periods=len(w), freq="1min"))
+    assert abs(misfit(frame, unspecified)[0] - misfit(w, system)[0]) <= 1e-10 * misfit(w, system)[0]
+
+
+def test_choose_lag_and_misfit_vs_lag_take_frames_by_name() -> None:
+    from ident.validation import choose_lag, misfit_vs_lag
+    _, w = noisy_data(T=300)
+    frame = frame_of(w)
+    curve = misfit_vs_lag(frame.iloc[:200], 1, [2], validation=frame.iloc[200:][["position", "force"]])
+    curve_arrays = misfit_vs_lag(w[:200], 1, [2], validation=w[200:])
+    assert np.allclose(curve.fit, curve_arrays.fit, atol=1e-6) and curve.fit[0] > 80
+    choice = choose_lag(frame, 1, [1, 2], exct=["force"])
+    assert choice.ell == choose_lag(w, 1, [1, 2], exct=[0]).ell
 
 
 def test_import_ident_does_not_need_pandas_for_arrays(monkeypatch) -> None:
