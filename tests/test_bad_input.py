@@ -570,9 +570,9 @@ def test_load_model_reads_what_model_document_writes(tmp_path) -> None:
     assert saved.model.dt == 1 and saved.info == {"lag": 1}
     path.write_text(model_text())
     assert load_model(path).model.dt == 0.1
+
+
 # --- DataFrames: names, not positions, and time indexes (issue 32) ---------------------------------
-
-
 # A frame's column names decide the roles wherever a named model meets it (misfit, compare, resid,
 # validate, fit_percent, misfit_vs_lag's validation, ident's sys0); names are unique as text; a time
 # index (datetime, timedelta, period, float) is checked and gives the sample time; an integer index
