@@ -257,6 +257,100 @@ CASES = [
 ]
 
 
+# --- issue 32, the small remainder: lags are never coerced, and misfit_vs_lag checks its arguments --
+# (before any identification, so that bad input is an error naming it, not a curve of NaN)
+from ident.validation import choose_lag, misfit_vs_lag  # noqa: E402
+
+W_LAGS = np.random.default_rng(5).standard_normal((120, 3))
+W_LAGS_VALIDATION = W_LAGS[80:]
+
+CASES += [
+    ('misfit_vs_lag fractional lags', lambda: misfit_vs_lag(W, 1, [1.5, 2.7]),
+     ValueError, 'lags must be a non-empty sequence of non-negative integers.*1.5 is not one: a float'),
+    ('misfit_vs_lag integral float lag', lambda: misfit_vs_lag(W, 1, [1, 2.0]),
+     ValueError, 'lags must be .*2.0 is not one: a float'),
+    ('misfit_vs_lag numpy float lag', lambda: misfit_vs_lag(W, 1, [np.float64(2)]),
+     ValueError, 'lags must be .*is not one: a float64'),
+    ('misfit_vs_lag numpy float lags', lambda: misfit_vs_lag(W, 1, np.array([1.0, 2.0])),
+     ValueError, 'lags must be .*is not one: a float64'),
+    ('misfit_vs_lag string lags', lambda: misfit_vs_lag(W, 1, '12'),
+     TypeError, "lags must be a sequence of non-negative integers, e.g. range\\(1, 6\\), got '12'"),
+    ('misfit_vs_lag string lag', lambda: misfit_vs_lag(W, 1, ['1', '2']),
+     ValueError, "lags must be .*'1' is not one: a str"),
+    ('misfit_vs_lag bool lag', lambda: misfit_vs_lag(W, 1, [True]),
+     ValueError, 'lags must be .*True is not one: a bool'),
+    ('misfit_vs_lag negative lag', lambda: misfit_vs_lag(W, 1, [1, -1]),
+     ValueError, 'lags must be .*-1 is not one\\)'),
+    ('misfit_vs_lag scalar lags', lambda: misfit_vs_lag(W, 1, 3),
+     TypeError, 'lags must be a sequence of non-negative integers'),
+    ('misfit_vs_lag 2-d lags', lambda: misfit_vs_lag(W, 1, np.array([[1, 2]])),
+     TypeError, 'lags must be a sequence of non-negative integers'),
+    ('misfit_vs_lag no lags', lambda: misfit_vs_lag(W, 1, []),
+     ValueError, 'lags must be a non-empty sequence'),
+    ('choose_lag fractional lags', lambda: choose_lag(W_LAGS, 1, [1.5, 2.7]),
+     ValueError, 'lags must be a non-empty sequence of positive integers.*1.5 is not one: a float'),
+    ('choose_lag integral float lag', lambda: choose_lag(W_LAGS, 1, [1, 2.0]),
+     ValueError, 'lags must be .*2.0 is not one: a float'),
+    ('choose_lag numpy float lag', lambda: choose_lag(W_LAGS, 1, [np.float32(1)]),
+     ValueError, 'lags must be .*is not one: a float32'),
+    ('choose_lag string lags', lambda: choose_lag(W_LAGS, 1, '12'),
+     TypeError, "lags must be a sequence of positive integers.*got '12'"),
+    ('choose_lag bool lag', lambda: choose_lag(W_LAGS, 1, [False, 1]),
+     ValueError, 'lags must be .*False is not one: a bool'),
+    ('ident numpy float ell', lambda: ident(W, 1, np.float64(1)),
+     TypeError, 'ell must be an integer, got np.float64\\(1.0\\)|ell must be an integer, got 1.0'),
+    ('ident integral float ell', lambda: ident(W, 1, 2.0),
+     TypeError, 'ell must be an integer, got 2.0'),
+    ('ident bool ell', lambda: ident(W, 1, True),
+     TypeError, 'ell must be an integer, got True'),
+    # validation: one finite T_v x q array with the q of w
+    ('validation string', lambda: misfit_vs_lag(W_LAGS, 1, [1], validation='abc'),
+     TypeError, 'validation must be a T_v x q array of validation data.*got str'),
+    ('validation scalar', lambda: misfit_vs_lag(W_LAGS, 1, [1], validation=3.0),
+     TypeError, 'validation must be a T_v x q array.*got float'),
+    ('validation 1-d', lambda: misfit_vs_lag(W_LAGS, 1, [1], validation=np.ones(40)),
+     ValueError, 'validation must be a T x q array \\(samples in rows\\), got shape \\(40,\\)'),
+    ('validation 3-d', lambda: misfit_vs_lag(W_LAGS, 1, [1], validation=np.ones((40, 3, 2))),
+     ValueError, 'validation must be a T x q array .*got shape \\(40, 3, 2\\)'),
+    ('validation wrong q', lambda: misfit_vs_lag(W_LAGS, 1, [1], validation=W_LAGS_VALIDATION[:, :2]),
+     ValueError, 'validation has q = 2 variables but w has q = 3'),
+    ('validation transposed', lambda: misfit_vs_lag(W_LAGS, 1, [1], validation=W_LAGS_VALIDATION.T),
+     ValueError, 'validation has q = 40 variables but w has q = 3'),
+    ('validation nan', lambda: misfit_vs_lag(W_LAGS, 1, [1], validation=np.where(W_LAGS_VALIDATION > 1.5, np.nan, W_LAGS_VALIDATION)),
+     ValueError, 'validation holds .* non-finite value'),
+    ('validation inf', lambda: misfit_vs_lag(W_LAGS, 1, [1], validation=np.where(W_LAGS_VALIDATION > 1.5, np.inf, W_LAGS_VALIDATION)),
+     ValueError, 'validation holds .* non-finite value'),
+    ('validation complex', lambda: misfit_vs_lag(W_LAGS, 1, [1], validation=W_LAGS_VALIDATION + 1j),
+     TypeError, 'validation must hold real numbers, got dtype complex128'),
+    ('validation strings', lambda: misfit_vs_lag(W_LAGS, 1, [1], validation=[['a', 'b', 'c']]),
+     TypeError, 'validation must hold real numbers'),
+    ('validation empty', lambda: misfit_vs_lag(W_LAGS, 1, [1], validation=np.zeros((0, 3))),
+     ValueError, 'validation is empty'),
+    ('validation ragged', lambda: misfit_vs_lag(W_LAGS, 1, [1], validation=[[1.0, 2.0, 3.0], [1.0]]),
+     ValueError, 'validation is a ragged nested sequence'),
+    # the other arguments of misfit_vs_lag: errors, not NaN at every lag
+    ('misfit_vs_lag m too large', lambda: misfit_vs_lag(W_LAGS, 3, [1, 2]),
+     ValueError, 'm must satisfy 0 <= m <= 2'),
+    ('misfit_vs_lag m float', lambda: misfit_vs_lag(W_LAGS, 1.0, [1, 2]),
+     TypeError, 'm must be an integer, got 1.0'),
+    ('misfit_vs_lag 1-d w', lambda: misfit_vs_lag(np.ones(50), 1, [1]),
+     ValueError, 'w must be a T x q array'),
+    ('misfit_vs_lag tol', lambda: misfit_vs_lag(W_LAGS, 1, [1, 2], tol=-1),
+     ValueError, 'tol must be a finite positive number, got -1'),
+    ('misfit_vs_lag maxiter', lambda: misfit_vs_lag(W_LAGS, 1, [1, 2], maxiter=2.5),
+     TypeError, 'maxiter must be an integer, got 2.5'),
+    ('misfit_vs_lag exct', lambda: misfit_vs_lag(W_LAGS, 1, [1, 2], exct=[5]),
+     ValueError, 'exct indices must lie in 0 .. q-1 = 2, got \\[5\\]'),
+    ('misfit_vs_lag init', lambda: misfit_vs_lag(W_LAGS, 1, [1, 2], init='pem'),
+     ValueError, "init: unknown start 'pem'"),
+    ('misfit_vs_lag wini for one lag only', lambda: misfit_vs_lag(W_LAGS, 1, [1, 2], wini=[np.zeros((1, 3))]),
+     ValueError, 'wini\\[0\\] must be ell x q = 2 x 3, got shape \\(1, 3\\)'),
+    ('misfit_vs_lag zero input', lambda: misfit_vs_lag(W_ZERO_INPUT, 1, [1, 2]),
+     ValueError, 'variable 0 of w, an input .*is zero in every sample'),
+    ('misfit_vs_lag label', lambda: misfit_vs_lag(W_LAGS, 1, [1], label=3),
+     TypeError, 'label must be a str'),
+]
+
 @pytest.mark.parametrize("name, call, error, words", CASES, ids=[c[0] for c in CASES])
 def test_bad_input_is_refused_clearly(name, call, error, words) -> None:
     with pytest.raises(error, match=words) as caught:
@@ -728,3 +822,99 @@ FRAME_CASES = [
 @pytest.mark.parametrize("name, call, error, words", FRAME_CASES, ids=[c[0] for c in FRAME_CASES])
 def test_bad_frames_and_times_are_refused_clearly(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# --- issue 32, the small remainder: resid at any scale, misfits beyond the floating-point range, -----
+# --- and the BLAS thread limit over the whole of ident ----------------------------------------------
+
+def resid_data(n_samples: int = 400):
+    from ident.representations import simulate
+    rng = np.random.default_rng(12)
+    model = random_system(1, 1, 2, rng)
+    u = rng.standard_normal((n_samples, 1))
+    y = simulate(model, u, rng.standard_normal(2)) + 0.05 * rng.standard_normal((n_samples, 1))
+    return model, np.hstack([u, y])
+
+
+@pytest.mark.parametrize("scale", [1e-200, 1e-150, 1e-100, 1e100, 1e154, 1e200, 1e300])
+def test_resid_correlations_are_the_same_at_any_scale(scale) -> None:
+    from ident.validation import resid
+    model, w = resid_data()
+    reference = resid(w, model, lags=10)
+    with warnings_as_errors():  # no overflow, underflow or invalid value on the way, and no NaN
+        scaled = resid(scale * w, model, lags=10)
+    for name in ("autocorrelation", "cross_correlation", "cross_bound"):
+        values = getattr(scaled, name)
+        assert np.all(np.isfinite(values)), name
+        np.testing.assert_allclose(values, getattr(reference, name), rtol=1e-7, atol=1e-9, err_msg=name)
+    np.testing.assert_allclose(scaled.residuals[0] / scale, reference.residuals[0], rtol=1e-6, atol=1e-9)
+
+
+def test_resid_of_a_zero_residual_and_a_constant_input_is_never_nan() -> None:
+    from ident.representations import make_ss
+    from ident.validation import resid
+    static = make_ss(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[2.0]])
+    u = np.random.default_rng(3).standard_normal((50, 1))
+    with pytest.warns(RuntimeWarning, match="the residual of y\\[0\\] is zero") as record:
+        exact = resid(np.hstack([u, 2 * u]), static, lags=5)
+    assert record[0].filename == __file__
+    assert exact.autocorrelation[:, 0].tolist() == [1.0, 0, 0, 0, 0, 0]
+    assert np.all(exact.cross_correlation == 0) and np.all(exact.cross_bound == 0)
+    with pytest.warns(RuntimeWarning, match="input u\\[0\\] is constant on w"):
+        constant = resid(np.hstack([np.ones((50, 1)), 2 + u]), static, lags=5)
+    assert not np.any(np.isnan(constant.autocorrelation)) and not np.any(np.isnan(constant.cross_correlation))
+    assert np.all(constant.cross_correlation == 0) and np.all(constant.cross_bound == 0)
+
+
+@pytest.mark.parametrize("scale, beyond", [(1e200, np.inf), (1e-200, 0.0)])
+def test_what_is_derived_from_a_misfit_beyond_the_range_is_computed_where_it_is_not(scale, beyond) -> None:
+    """The misfit itself is inf or 0 with a note; the fit derived from it is the same as at scale 1,
+    never inf / inf."""
+    from ident.validation import errors_in_variables, validate
+    model, w = resid_data()
+    M, fit, note = errors_in_variables(model, w[:, :1], w[:, 1:])
+    assert 0 < M < np.inf and 0 < fit < 100 and note == ""
+    M_scaled, fit_scaled, note_scaled = errors_in_variables(model, scale * w[:, :1], scale * w[:, 1:])
+    assert M_scaled == beyond and fit_scaled == pytest.approx(fit, rel=1e-9)
+    assert "beyond the floating-point range" in note_scaled
+    checked = validate(model, scale * w[:, :1], scale * w[:, 1:])
+    assert checked.misfit == beyond and checked.eiv_fit == pytest.approx(fit, rel=1e-9)
+    assert "beyond the floating-point range" in checked.reason
+
+
+def test_a_lag_curve_keeps_every_warning_of_a_lag() -> None:
+    """An overflowing misfit is inf in the curve and says so, beside the other warnings of that lag;
+    the validation fit is that of the data at scale 1."""
+    from ident.validation import misfit_vs_lag
+    _, w = resid_data()
+    reference = misfit_vs_lag(w[:300], 1, [2], validation=w[300:], maxiter=1)
+    curve = misfit_vs_lag(1e200 * w[:300], 1, [2], validation=1e200 * w[300:], maxiter=1)
+    assert curve.misfit[0] == np.inf and curve.fit[0] == pytest.approx(reference.fit[0], rel=1e-6)
+    assert "beyond the floating-point range" in curve.messages[0]
+    assert "info.converged is False" in curve.messages[0]
+
+
+def test_lags_given_as_numpy_integers_are_lags() -> None:
+    from ident.validation import misfit_vs_lag
+    curve = misfit_vs_lag(W_LAGS, 1, np.arange(0, 2))
+    assert curve.lags == [0, 1] and all(type(lag) is int for lag in curve.lags)
+    assert np.all(np.isfinite(curve.misfit))
+
+
+def test_the_blas_limit_holds_in_initial_states_and_is_undone_after(monkeypatch) -> None:
+    import threadpoolctl
+    import ident.identification as identification
+
+    seen = []
+    original = identification.initial_states
+
+    def observed(*args, **kwargs):
+        seen.append([lib["num_threads"] for lib in threadpoolctl.threadpool_info() if lib["user_api"] == "blas"])
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(identification, "initial_states", observed)
+    with threadpoolctl.threadpool_limits(limits=2, user_api="blas"):
+        ident([W[:30], W[30:]], 1, 1)
+        after = [lib["num_threads"] for lib in threadpoolctl.threadpool_info() if lib["user_api"] == "blas"]
+    assert seen and all(threads == [1] * len(threads) for threads in seen), seen
+    assert after == [2] * len(after)

@@ -389,3 +389,23 @@ def test_refine_continues_every_candidate_to_its_local_minimum() -> None:
     assert tight.converged and tight.M == next(c.misfit for c in tight.candidates if c.start == tight.start)
     with pytest.raises(ValueError, match="refine must be a finite positive number"):
         ident(w, 1, 3, refine=0)
+
+
+# --- issue 32: the initial states of many series are solved together --------------------------------
+
+@pytest.mark.parametrize("m, p, ell", [(1, 1, 1), (2, 2, 2), (0, 2, 3), (1, 3, 2)])
+def test_initial_states_of_all_series_at_once_are_inistate_of_each(m, p, ell) -> None:
+    """One shared least-squares problem gives what inistate gives series by series, also for series
+    shorter than ell + 1 (possible with given initial conditions: the minimum-norm state, warned)."""
+    from ident.identification import initial_states
+    from ident.representations import IllConditionedWarning, inistate
+    rng = np.random.default_rng(ell)
+    system = random_system(m, p, ell, rng)
+    series = [trajectory(system, n_samples, rng) for n_samples in (1, ell + 1, ell + 4, 3, 40, ell + 1)]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        together = initial_states(series, system, ell)
+        one_by_one = np.column_stack([inistate(w[:ell + 1], system) for w in series])
+    np.testing.assert_allclose(together, one_by_one, rtol=1e-10, atol=1e-12 * np.abs(one_by_one).max())
+    assert together.shape == (system.nstates, len(series))
+    assert any(issubclass(w.category, IllConditionedWarning) for w in caught) == (system.nstates > p)
