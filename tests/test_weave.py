@@ -125,7 +125,9 @@ def small(tmp_path_factory) -> tuple[Path, Path, dict]:
     out.mkdir()
     (out / "README.md").write_text("kept\n")
     (out / "figures").mkdir()
-    (out / "figures" / "stale.png").write_bytes(b"old")
+    (out / "figures" / "stale.png").write_bytes(b"old")  # an earlier weave's, as its manifest says
+    (out / "figures" / "mine.png").write_bytes(b"user")  # the user's own
+    (out / weave.MANIFEST).write_text(weave.manifest_text(["figures/stale.png"]), encoding="utf-8")
     summary = weave.Weave(root, out).run()
     return root, out, summary
 
@@ -186,6 +188,7 @@ def test_pages_index_and_style_are_written(small) -> None:
     assert (out / "style.css").is_file() and ".highlight" in read(out, "style.css")
     assert read(out, "README.md") == "kept\n"  # not written by the weave: left alone
     assert not (out / "figures" / "stale.png").exists()  # an earlier weave's figure is removed
+    assert (out / "figures" / "mine.png").read_bytes() == b"user"  # a file no weave wrote stays
     assert summary["pages"] == 2 and summary["examples"] == 4 and summary["values"] == 0
 
 
@@ -248,7 +251,7 @@ def test_examples_show_their_output_and_figures(small) -> None:
     assert "the figure folder is docs/figures" in first  # paths printed by examples are stable
     figures = sorted(p.name for p in (out / "figures").iterdir())
     assert figures == ["01-first-binds-a-figure-and-uses-the-namespace.png", "01-first-prints-and-plots.png",
-                       "own-figure.png"]
+                       "mine.png", "own-figure.png"]  # mine.png: the user's own, left alone
     for name in figures:
         assert f'src="figures/{name}"' in first
         data = (out / "figures" / name).read_bytes()
