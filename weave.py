@@ -1451,7 +1451,7 @@ def read_manifest(out: Path, warn) -> list[str] | None:
         reason = 'not {"generator": "' + GENERATOR + '", "files": [...]}'
     if not isinstance(files, list) or not all(isinstance(name, str) for name in files):
         warn(f"weave: warning: {path}: not a manifest of the weave ({reason}); no file there is removed "
-             "or replaced unless it carries the weave's mark or such a page links to it")
+             "or replaced unless it carries the weave's mark or a page with the mark links to it")
         return None
     strange = [name for name in files if not weave_like(name)]
     if strange:
@@ -1594,21 +1594,20 @@ class Weave:
     # files
     def previous_outputs(self) -> set[str]:
         """What an earlier weave wrote into the output folder, as far as can be known: the files its
-        manifest lists; without one (a folder woven before the weave kept a manifest, as docs/ was up
-        to issue 32), the pages and style sheet that carry the weave's mark and the figures and
-        notebooks those pages link to (an earlier weave removed every other file there). A user's
-        own file is in neither, so that the weave never removes or replaces it."""
-        listed = read_manifest(self.out, self.warn)
-        if listed is not None:
-            return {name for name in listed if self.removable(name)}
+        manifest lists, and the pages and style sheet that carry the weave's mark with the figures and
+        notebooks those pages link to. The second is what a folder woven before the weave kept a
+        manifest holds (docs/ up to issue 32: that weave removed every other file of figures/ and
+        notebooks/), and what a lost or damaged manifest leaves known. A user's own file is in
+        neither, so that the weave never removes or replaces it."""
         if not self.out.is_dir():
             return set()
-        found = {name for name in ["style.css"] + sorted(p.name for p in self.out.glob("*.html"))
+        found = {name for name in read_manifest(self.out, self.warn) or [] if self.removable(name)}
+        pages = {name for name in ["style.css"] + sorted(p.name for p in self.out.glob("*.html"))
                  if self.removable(name)}
-        for name in sorted(n for n in found if n.endswith(".html")):
+        for name in sorted(n for n in pages if n.endswith(".html")):
             page = (self.out / name).read_text(encoding="utf-8", errors="replace")
             found |= {link for link in map(html.unescape, OUTPUT_LINK.findall(page)) if self.removable(link)}
-        return found
+        return found | pages
 
     def foreseen_outputs(self) -> list[str]:
         """The files the weave will write whatever the examples do: pages, style sheet, notebooks."""
