@@ -30,11 +30,19 @@ parsed and numbered first, every one of them, and rendered second, so that a ref
 forward or to another page.
 
 The weave is all or nothing.  It writes into a new folder beside the output folder and moves the
-files into the output folder only when every example and inline value ran; files it did not write
-(``docs/daisy/``) stay, and files whose bytes did not change are not touched.  Otherwise it exits with
-status 1, naming each example or inline value that failed with its ``file:line`` and traceback, and
-each one skipped because it reads a name that a failed one was to define; the output folder is left
-as it was.  Weaving twice gives the same files.
+files into the output folder only when every example and inline value ran; files whose bytes did not
+change are not touched.  Otherwise it exits with status 1, naming each example or inline value that
+failed with its ``file:line`` and traceback, and each one skipped because it reads a name that a
+failed one was to define; the output folder is left as it was.  Weaving twice gives the same files.
+
+The weave removes or replaces only files it wrote itself.  ``weave-manifest.json`` in the output
+folder lists the files the last weave wrote; a file of an earlier weave that this one does not
+write is removed if the manifest lists it or if it is a page or style sheet with the weave's mark
+(or a figure or notebook such a page links to: that is how a folder woven before there was a
+manifest is read).  Any other file (``docs/daisy/``, ``docs/README.md``, a user's own figure) stays,
+and if the weave is to write a file that exists and is not its own, it stops with status 2 naming
+``--out`` and the files, changing nothing.  Files are moved into place one by one with ``os.replace``
+(none is ever half written); a failure, Ctrl-C or SIGTERM during the move puts back what was there.
 
 Usage::
 
