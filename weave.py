@@ -1467,6 +1467,16 @@ def read_manifest(out: Path, warn) -> list[str] | None:
     return [name for name in files if weave_like(name)]
 
 
+def remove_leftover_temporaries(out: Path) -> None:
+    """Remove the temporaries of ``replace_bytes`` that a killed weave left (only names it gives)."""
+    for path in out.rglob(".*.weave-new"):
+        folder, _, base = path.relative_to(out).as_posix().removesuffix(".weave-new").rpartition("/")
+        name = (folder + "/" if folder else "") + base.removeprefix(".")
+        if (weave_like(name) or name == MANIFEST) and path.is_file() and not path.is_symlink():
+            with contextlib.suppress(OSError):  # housekeeping: one it cannot remove does no harm
+                path.unlink()
+
+
 def replace_bytes(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` through a temporary beside it: the file is whole at every moment."""
     temporary = path.with_name(f".{path.name}.weave-new")
@@ -1654,7 +1664,10 @@ class Weave:
         previous = self.previous_outputs()
         self.refuse_foreign(new, previous)
         undo: list[tuple[Path, bytes | None]] = []  # what each step replaced, in order
-        made = [self.out / folder for folder in ("", "figures", "notebooks") if not (self.out / folder).exists()]
+        folders = {folder for name in new for folder in (self.out / name).parents
+                   if folder == self.out or self.out in folder.parents}
+        made = sorted((f for f in folders if not f.exists()), key=lambda folder: len(folder.parts))  # outermost first
+        remove_leftover_temporaries(self.out)
         current = MANIFEST
         try:
             self.replace(MANIFEST, manifest_text(previous | new), undo)
@@ -1976,6 +1989,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"weave: interrupted; {out} is left as it was", file=sys.stderr)
         return 130
+    except OSError as error:  # the output folder cannot be written (permissions, a full disk)
+        print(f"weave: error: {error.filename or out}: {error.strerror or error}", file=sys.stderr)
+        return 1
     except ImportError as error:
         print(f"weave: error: {error}; install the documentation dependencies: pip install -e '.[docs]'",
               file=sys.stderr)
@@ -1995,6 +2011,9 @@ def check_options(root: Path, out: Path) -> None:
         raise OptionError(str(error)) from None
     if os.path.lexists(out) and not out.is_dir():
         raise OptionError(f"--out {out} exists and is not a folder; name a folder (it is made if missing)")
+    blocking = next((p for p in out.absolute().parents if os.path.lexists(p) and not p.is_dir()), None)
+    if blocking is not None:
+        raise OptionError(f"--out {out}: {blocking} is a file, not a folder; name a folder")
 
 
 @contextlib.contextmanager

@@ -1026,6 +1026,22 @@ def test_bad_root_and_out_are_refused_before_anything_runs(tmp_path, capsys) -> 
     assert capsys.readouterr().err == f"weave: error: --out {tmp_path / 'a-file'} exists and is not a folder; " \
                                       "name a folder (it is made if missing)\n"
     assert (tmp_path / "a-file").read_text() == "mine\n"
+    assert weave_at(root, tmp_path / "a-file" / "docs") == 2
+    assert capsys.readouterr().err == f"weave: error: --out {tmp_path / 'a-file' / 'docs'}: {tmp_path / 'a-file'} " \
+                                      "is a file, not a folder; name a folder\n"
+    assert (tmp_path / "a-file").read_text() == "mine\n"
+
+
+def test_temporaries_a_killed_weave_left_are_removed_by_the_next(tmp_path) -> None:
+    root = make_project(tmp_path / "project")
+    out = tmp_path / "out"
+    assert weave_at(root, out) == 0
+    left = [f".{weave.MANIFEST}.weave-new", ".index.html.weave-new", "figures/.own-figure.png.weave-new"]
+    for name in left:
+        (out / name).write_bytes(b"half")
+    (out / ".notes.weave-new").write_bytes(b"mine")  # not a name the weave gives
+    assert weave_at(root, out) == 0
+    assert not [name for name in left if (out / name).exists()] and (out / ".notes.weave-new").read_bytes() == b"mine"
 
 
 def test_an_exponential_chunk_stops_the_weave_with_the_clear_error(tmp_path) -> None:
