@@ -42,6 +42,7 @@ import contextlib
 import dataclasses
 import os
 import re
+import signal
 import sys
 from pathlib import Path
 
@@ -698,12 +699,36 @@ def main(argv: list[str] | None = None) -> int:
             print(f"tangle.py --check: {len(outputs)} file(s) up to date")
             return 0
         origins = {name: web.pieces[name][0].location for name in outputs}
-        for change in write(args.root, outputs, origins):
+        with interrupt_on_sigterm():
+            changes = write(args.root, outputs, origins)
+        for change in changes:
             print(change)
     except TangleError as error:
         print(f"tangle.py: error: {error}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(f"tangle.py: interrupted; {PACKAGE_DIR}/ is left as it was", file=sys.stderr)
+        return 130
     return 0
+
+
+@contextlib.contextmanager
+def interrupt_on_sigterm():
+    """SIGTERM (a ``kill``, a CI time limit) interrupts as Ctrl-C does (a KeyboardInterrupt), so that
+    a half-done write is put back (and the weave's build folder removed) instead of the process just
+    ending."""
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        previous = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread: signals cannot be caught here
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def check_root(root: Path) -> None:

@@ -68,7 +68,6 @@ import json
 import os
 import re
 import shutil
-import signal
 import struct
 import symtable
 import sys
@@ -1978,7 +1977,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         check_options(args.root, out)
         weave = Weave(args.root, out, notebooks=not args.no_notebooks)
-        with interrupt_on_sigterm():
+        with tangle.interrupt_on_sigterm():
             summary = weave.run()
     except OptionError as error:
         print(f"weave: error: {error}", file=sys.stderr)
@@ -2014,24 +2013,6 @@ def check_options(root: Path, out: Path) -> None:
     blocking = next((p for p in out.absolute().parents if os.path.lexists(p) and not p.is_dir()), None)
     if blocking is not None:
         raise OptionError(f"--out {out}: {blocking} is a file, not a folder; name a folder")
-
-
-@contextlib.contextmanager
-def interrupt_on_sigterm():
-    """SIGTERM (a ``kill``, a CI time limit) interrupts the weave as Ctrl-C does, so that the build
-    folder is removed and a half-done install is put back instead of the process just ending."""
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt
-
-    try:
-        previous = signal.signal(signal.SIGTERM, interrupt)
-    except ValueError:  # not the main thread: signals cannot be caught here
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

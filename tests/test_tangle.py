@@ -502,7 +502,7 @@ def test_exponential_document_on_the_command_line_fails_fast_without_memory(tmp_
     assert not (root / "src").exists()
 
 
-def test_an_interrupt_midway_puts_everything_back_and_leaves_no_temporary(tmp_path, monkeypatch) -> None:
+def test_an_interrupt_midway_puts_everything_back_and_leaves_no_temporary(tmp_path, monkeypatch, capsys) -> None:
     root = generated_project(tmp_path)
     (root / "literate/a.md").write_text(chunk("<<src/ident/m.py>>=", "a = 2") + chunk("<<src/ident/n.py>>=", "b = 2")
                                         + chunk("<<src/ident/sub/o.py>>=", "c = 2"))
@@ -518,9 +518,18 @@ def test_an_interrupt_midway_puts_everything_back_and_leaves_no_temporary(tmp_pa
 
     monkeypatch.setattr(tangle.os, "replace", interrupted_replace)
     with pytest.raises(KeyboardInterrupt):
-        tangle.main(["--root", str(root)])
+        tangle.write(root, tangle.tangle(root)[0])
     monkeypatch.undo()
     assert snapshot(root) == before and not (root / "src/ident/sub").exists()
+    calls.clear()
+    monkeypatch.setattr(tangle.os, "replace", interrupted_replace)
+    try:
+        status = tangle.main(["--root", str(root)])
+    except KeyboardInterrupt:  # the command line must turn it into its exit status
+        status = None
+    monkeypatch.undo()
+    assert status == 130 and capsys.readouterr().err == "tangle.py: interrupted; src/ident/ is left as it was\n"
+    assert snapshot(root) == before
 
 
 def test_an_interrupt_while_writing_a_temporary_leaves_none(tmp_path, monkeypatch) -> None:
@@ -539,7 +548,7 @@ def test_an_interrupt_while_writing_a_temporary_leaves_none(tmp_path, monkeypatc
 
     monkeypatch.setattr(Path, "open", interrupted_open)
     with pytest.raises(KeyboardInterrupt):
-        tangle.main(["--root", str(root)])
+        tangle.write(root, tangle.tangle(root)[0])
     monkeypatch.undo()
     assert snapshot(root) == before
 
