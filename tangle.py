@@ -575,8 +575,9 @@ def write(root: Path, outputs: dict[str, str], origins: dict[str, Location] | No
     Every new content is first written to a temporary file beside its target; only when all are
     written are they moved into place (``os.replace``, so that no file is ever partly written) and
     the stale files removed, and a failure or an interrupt on the way puts back what was there
-    before and removes the temporaries (those a killed run left are removed by the next run). Nothing outside src/ident/ is written or removed. A refusal is a
-    TangleError naming the root chunk's file:line (from ``origins``) or the generated file.
+    before and removes the temporaries (those a killed run left are removed by the next run).
+    Nothing outside src/ident/ is written or removed. A refusal is a TangleError naming the root
+    chunk's file:line (from ``origins``) or the generated file.
     """
     origins = origins or {}
     package = (root / PACKAGE_DIR).resolve()
