@@ -26,7 +26,11 @@ Usage::
 The tangler reads UTF-8 (a byte-order mark is allowed), writes only ``.py`` files inside
 ``src/ident/`` and removes only generated files there whose root chunk is gone, and writes all
 files or none: a refusal changes nothing and names the literate ``file:line`` behind it (or the
-option).  Chunks may nest to any depth.
+option).  Each file is written to a temporary beside it and moved into place, so that an
+interrupted run leaves no partly written file.  Chunks may nest to any depth; a chunk whose
+expansion would exceed ``MAX_EXPANDED_LINES`` lines or ``MAX_EXPANDED_CHARS`` characters (a chunk
+included several times at each of several nested levels grows exponentially) is refused, naming
+it, before anything is expanded.
 
 Standard library only: the tangler must run before anything is installed.  The woven document is
 written by ``python weave.py``, which imports this module (this module never imports it).
@@ -34,9 +38,11 @@ written by ``python weave.py``, which imports this module (this module never imp
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import os
 import re
+import signal
 import sys
 from pathlib import Path
 
@@ -49,6 +55,13 @@ HEADER_LIKE = re.compile(r"^#\s*<<")
 EXAMPLE_HEADER = re.compile(r"^#\s*example:\s*(?P<name>\S.*?)\s*$")
 REFERENCE = re.compile(r"^(?P<indent>[ \t]*)<<(?P<name>.+?)>>\s*$")
 INLINE_VALUE = re.compile(r"`\{python\}[ \t]+(?P<expression>[^`]*?)[ \t]*`")
+# A chunk's expansion is bounded: a chunk that includes another k times, nested n deep, expands to
+# k**n copies, so a 3 kB document can ask for 2**60 lines (and the indentation a reference adds
+# grows with the depth, so deep nesting alone is quadratic in characters). The largest file the real
+# documents produce is about 740 lines and 39 kB (src/ident/identification.py); the limits are far
+# above, and a chunk over them is refused from sizes computed without expanding anything.
+MAX_EXPANDED_LINES = 200_000
+MAX_EXPANDED_CHARS = 20_000_000
 
 
 class TangleError(Exception):
@@ -332,6 +345,7 @@ def check_references(web: Web) -> None:
     visited: set[str] = set()
     for name in sorted(web.pieces):
         find_cycle(web, name, [], visited)
+    check_expansion(web)
     for name, blocks in web.pieces.items():
         if not is_root(name) and name not in used:
             web.warnings.append(f"{blocks[0].location}: warning: chunk <<{name}>> is defined but never used")
@@ -359,9 +373,85 @@ def find_cycle(web: Web, name: str, stack: list[tuple[str, Location]], done: set
             pending.append(iter([t for block in web.pieces[target] for t in references(block)]))
 
 
+def included(web: Web, name: str) -> list[tuple[str, str]]:
+    """(name, indentation) of each reference in chunk ``name``'s pieces, in order, repeats kept."""
+    return [(target, indent) for block in web.pieces[name] for _, indent, target in references(block)]
+
+
+def expanded_sizes(web: Web, names=None) -> dict[str, tuple[int, int]]:
+    """(lines, characters) of the expansion of each chunk reachable from ``names`` (default: every
+    chunk), header comments and newlines included, the indentation of references counted on every
+    line (an upper bound: blank lines lose it). Each chunk's size is computed once from the sizes of
+    the chunks it includes (exact integers, so an exponential size is a number, not an attempt);
+    nothing is expanded. An explicit stack, so that deep nesting is no limit."""
+    sizes: dict[str, tuple[int, int]] = {}
+    entered: set[str] = set()
+    for start in (web.pieces if names is None else names):
+        stack = [start]
+        while stack:
+            name = stack[-1]
+            if name in sizes:
+                stack.pop()
+                continue
+            waiting = [target for target, _ in included(web, name) if target not in sizes]
+            if waiting and name not in entered:
+                entered.add(name)
+                stack.extend(waiting)
+                continue
+            if waiting:  # a chunk below it in the stack includes it: build_web refuses cycles first
+                raise TangleError(f"{web.pieces[name][0].location}: cycle of chunk references through <<{name}>>")
+            lines = chars = 0
+            for block in web.pieces[name]:
+                lines += 1
+                chars += len(f"# <<{name}>>+= {block.body_location}") + 1
+                for line in block.lines:
+                    if not REFERENCE.match(line):
+                        lines, chars = lines + 1, chars + len(line) + 1
+            for target, indent in included(web, name):
+                lines += sizes[target][0]
+                chars += sizes[target][1] + sizes[target][0] * len(indent)
+            sizes[name] = (lines, chars)
+            stack.pop()
+    return sizes
+
+
+def too_large(lines: int, chars: int) -> bool:
+    return lines > MAX_EXPANDED_LINES or chars > MAX_EXPANDED_CHARS
+
+
+def amount(number: int) -> str:
+    """A count for a message: exact up to a trillion, else its order of magnitude (an exponential
+    size may have more digits than ``str`` of an int converts)."""
+    return f"{number:,}" if number < 10**12 else f"about 10^{int((number.bit_length() - 1) * 0.30103)}"
+
+
+def expansion_error(web: Web, name: str, lines: int, chars: int) -> str:
+    return (f"{web.pieces[name][0].location}: chunk <<{name}>> expands to {amount(lines)} lines and "
+            f"{amount(chars)} characters, over the limit of {MAX_EXPANDED_LINES:,} lines or "
+            f"{MAX_EXPANDED_CHARS:,} characters (tangle.MAX_EXPANDED_LINES, MAX_EXPANDED_CHARS); a chunk "
+            "included several times at each of several nested levels multiplies its size, and each level of "
+            "nesting adds its indentation to every line below it")
+
+
+def check_expansion(web: Web) -> None:
+    """Refuse every chunk whose expansion is over the limits, naming the outermost ones (those no
+    other chunk over the limits includes), before anything is expanded."""
+    sizes = expanded_sizes(web)
+    over = {name for name, size in sizes.items() if too_large(*size)}
+    inner = {target for name in over for target, _ in included(web, name)}
+    outermost = sorted(over - inner, key=lambda name: (web.pieces[name][0].location.file,
+                                                       web.pieces[name][0].location.line))
+    if outermost:
+        raise TangleError("\n".join(expansion_error(web, name, *sizes[name]) for name in outermost))
+
+
 def expand(web: Web, name: str, indent: str = "") -> list[tuple[str, Location | None]]:
     """The lines of chunk ``name`` with references expanded, each with the literate line it came from
-    (an explicit stack of the chunks being expanded, so that deep nesting is no limit)."""
+    (an explicit stack of the chunks being expanded, so that deep nesting is no limit); a chunk
+    whose expansion is over the limits is refused before anything is built."""
+    lines, chars = expanded_sizes(web, [name])[name]
+    if too_large(lines, chars + lines * len(indent)):
+        raise TangleError(expansion_error(web, name, lines, chars + lines * len(indent)))
     out: list[tuple[str, Location | None]] = []
     pending = [(chunk_lines(web, name), indent)]
     while pending:
@@ -451,13 +541,43 @@ def inside(folder: Path, path: Path) -> bool:
     return resolved == folder or folder in resolved.parents
 
 
+TEMPORARY_SUFFIX = ".tangle-new"
+
+
+def temporary_beside(path: Path) -> Path:
+    """The tangler's temporary file for ``path``: in the same folder (so that ``os.replace`` moves it
+    into place in one step, and a reader sees the old file or the new one, never part of one)."""
+    return path.with_name(f".{path.name}{TEMPORARY_SUFFIX}")
+
+
+def remove_leftover_temporaries(package: Path) -> None:
+    """Remove the temporaries a killed run left in src/ident/ (its own names only, ``.NAME.py.tangle-new``)."""
+    if package.is_dir():
+        for path in package.rglob(f".*.py{TEMPORARY_SUFFIX}"):
+            if path.is_file() and not path.is_symlink():
+                with contextlib.suppress(OSError):  # housekeeping: one it cannot remove does no harm
+                    path.unlink()
+
+
+def replace_bytes(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary beside it: the file is whole at every moment."""
+    temporary = temporary_beside(path)
+    try:
+        temporary.write_bytes(data)
+        os.replace(temporary, path)
+    finally:
+        temporary.unlink(missing_ok=True)
+
+
 def write(root: Path, outputs: dict[str, str], origins: dict[str, Location] | None = None) -> list[str]:
     """Write changed files and remove stale generated ones, all or nothing; return what was changed.
 
     Every new content is first written to a temporary file beside its target; only when all are
-    written are they moved into place and the stale files removed, and a failure on the way puts
-    back what was there before. Nothing outside src/ident/ is written or removed. A refusal is a
-    TangleError naming the root chunk's file:line (from ``origins``) or the generated file.
+    written are they moved into place (``os.replace``, so that no file is ever partly written) and
+    the stale files removed, and a failure or an interrupt on the way puts back what was there
+    before and removes the temporaries (those a killed run left are removed by the next run).
+    Nothing outside src/ident/ is written or removed. A refusal is a TangleError naming the root
+    chunk's file:line (from ``origins``) or the generated file.
     """
     origins = origins or {}
     package = (root / PACKAGE_DIR).resolve()
@@ -486,10 +606,11 @@ def write(root: Path, outputs: dict[str, str], origins: dict[str, Location] | No
     for folder in dict.fromkeys(path.parent for _, path, _ in changes):
         made.extend(f for f in reversed([folder, *folder.parents]) if not f.exists() and f not in made)
     current = None
+    remove_leftover_temporaries(package)
     try:
         for current, path, text in changes:
             path.parent.mkdir(parents=True, exist_ok=True)
-            temporaries.append(path.with_name(f".{path.name}.tangle-new"))
+            temporaries.append(temporary_beside(path))
             with temporaries[-1].open("w", encoding="utf-8", newline="\n") as handle:
                 handle.write(text)
         for (current, path, _), temporary in zip(changes, temporaries):
@@ -498,17 +619,19 @@ def write(root: Path, outputs: dict[str, str], origins: dict[str, Location] | No
         for current in stale:
             undo.append((root / current, (root / current).read_bytes()))
             (root / current).unlink()
-    except OSError as error:
+    except BaseException as error:  # an OSError, or an interrupt (Ctrl-C): put everything back first
         for temporary in temporaries:
             temporary.unlink(missing_ok=True)
         for path, previous in reversed(undo):
             if previous is None:
                 path.unlink(missing_ok=True)
             else:
-                path.write_bytes(previous)
+                replace_bytes(path, previous)
         for folder in reversed(made):
             if folder.is_dir() and not any(folder.iterdir()):
                 folder.rmdir()
+        if not isinstance(error, OSError):
+            raise
         raise TangleError(f"{culprit(current)}cannot write {current} ({error.strerror or error}); "
                           "nothing was changed") from None
     return [f"wrote {name}" for name, _, _ in changes] + [f"removed {name} (no root chunk)" for name in stale]
@@ -577,12 +700,36 @@ def main(argv: list[str] | None = None) -> int:
             print(f"tangle.py --check: {len(outputs)} file(s) up to date")
             return 0
         origins = {name: web.pieces[name][0].location for name in outputs}
-        for change in write(args.root, outputs, origins):
+        with interrupt_on_sigterm():
+            changes = write(args.root, outputs, origins)
+        for change in changes:
             print(change)
     except TangleError as error:
         print(f"tangle.py: error: {error}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(f"tangle.py: interrupted; {PACKAGE_DIR}/ is left as it was", file=sys.stderr)
+        return 130
     return 0
+
+
+@contextlib.contextmanager
+def interrupt_on_sigterm():
+    """SIGTERM (a ``kill``, a CI time limit) interrupts as Ctrl-C does (a KeyboardInterrupt), so that
+    a half-done write is put back (and the weave's build folder removed) instead of the process just
+    ending."""
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        previous = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread: signals cannot be caught here
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def check_root(root: Path) -> None:

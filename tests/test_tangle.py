@@ -1,6 +1,7 @@
 """The tangler: the repository is up to date, and malformed literate input is refused with file:line."""
 from __future__ import annotations
 
+import os
 import random
 import subprocess
 import sys
@@ -419,3 +420,144 @@ def test_check_reads_a_damaged_generated_file_without_crashing(tmp_path, capsys)
     (root / "src/ident/m.py").write_bytes(b"\xff\xfe\x00garbage")
     assert tangle.main(["--root", str(root), "--check"]) == 1
     assert "src/ident/m.py: differs" in capsys.readouterr().out
+
+
+# --- issue 32 (the literate tools): a chunk's expansion is bounded, and an interrupted run leaves
+# --- no partly written file ----------------------------------------------------------------------
+
+def exponential_document(levels: int) -> str:
+    """A few kB: each chunk includes the next twice, so the root expands to about 2**levels lines."""
+    doc = chunk("<<src/ident/m.py>>=", "<<c0>>")
+    doc += "".join(chunk(f"<<c{k}>>=", f"<<c{k + 1}>>", f"<<c{k + 1}>>") for k in range(levels))
+    return doc + chunk(f"<<c{levels}>>=", "x = 1")
+
+
+def test_exponential_expansion_is_refused_naming_the_chunk_and_the_limit(tmp_path) -> None:
+    """18 levels: 786,432 lines, a size a run without the limit survives (the 3 kB document of 60
+    levels is tried in a process of limited memory below)."""
+    message = error_of(tmp_path, {"a.md": exponential_document(18)})
+    assert message.startswith("literate/a.md:1: chunk <<src/ident/m.py>> expands to 786,432 lines")
+    assert f"limit of {tangle.MAX_EXPANDED_LINES:,} lines" in message and "MAX_EXPANDED_LINES" in message
+    assert len(message.splitlines()) == 1  # the outermost chunk only, not each of the 60 inside it
+
+
+def test_expanded_sizes_are_computed_without_expanding(tmp_path, monkeypatch) -> None:
+    levels = 60
+    root = make_project(tmp_path, {"a.md": exponential_document(levels)})
+    monkeypatch.setattr(tangle, "check_expansion", lambda web: None)
+    web = tangle.read_web(root)
+    monkeypatch.setattr(tangle, "chunk_lines", None)  # any expansion would fail
+    lines = {levels: 2}  # the header comment and "x = 1"
+    for k in reversed(range(levels)):
+        lines[k] = 1 + 2 * lines[k + 1]
+    sizes = tangle.expanded_sizes(web)
+    assert sizes[f"c{levels}"] == (2, len(f"# <<c{levels}>>+= literate/a.md:{5 * levels + 8}") + 1 + len("x = 1\n"))
+    assert sizes["c0"][0] == lines[0] and sizes["src/ident/m.py"][0] == lines[0] + 1 > 2**60
+    with pytest.raises(tangle.TangleError, match=r"^literate/a\.md:1: chunk <<src/ident/m\.py>> expands to about"):
+        tangle.expand(web, "src/ident/m.py")  # the guard of expand itself, before building anything
+
+
+def test_sizes_match_the_expansion_of_the_real_documents() -> None:
+    """Sizes are exact in lines and an upper bound in characters, and the real documents are far
+    below the limits."""
+    web = tangle.read_web(PROJECT_ROOT)
+    sizes = tangle.expanded_sizes(web)
+    for name in web.roots():
+        lines = tangle.expand(web, name)
+        assert sizes[name][0] == len(lines), name
+        assert sizes[name][1] >= sum(len(line) + 1 for line, _ in lines), name
+        assert 20 * sizes[name][0] < tangle.MAX_EXPANDED_LINES and 20 * sizes[name][1] < tangle.MAX_EXPANDED_CHARS
+
+
+def test_deep_indentation_is_bounded_in_characters(tmp_path) -> None:
+    """3000 nested chunks, each indenting the next by 4 more spaces: few lines, but 36 MB of spaces."""
+    depth = 3000
+    doc = chunk("<<src/ident/q.py>>=", "<<l0>>")
+    doc += "".join(chunk(f"<<l{k}>>=", "x = 1", f"    <<l{k + 1}>>") for k in range(depth))
+    doc += chunk(f"<<l{depth}>>=", "y = 2")
+    message = error_of(tmp_path, {"a.md": doc})
+    assert message.startswith("literate/a.md:1: chunk <<src/ident/q.py>> expands to 6,003 lines and ")
+    assert f"{tangle.MAX_EXPANDED_CHARS:,} characters" in message
+
+
+def test_an_unused_exploding_chunk_is_refused_too(tmp_path) -> None:
+    doc = chunk("<<src/ident/m.py>>=", "a = 1") + exponential_document(40).replace("src/ident/m.py", "unused top")
+    assert error_of(tmp_path, {"a.md": doc}).startswith("literate/a.md:5: chunk <<unused top>> expands to about 10^12")
+
+
+def test_exponential_document_on_the_command_line_fails_fast_without_memory(tmp_path) -> None:
+    """In a process limited to 1 GB: the clear error (one line, exit 2), not a MemoryError."""
+    resource = pytest.importorskip("resource")
+    root = make_project(tmp_path, {"a.md": exponential_document(60)})
+
+    def limit_memory() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (2**30, 2**30))
+
+    assert len((root / "literate/a.md").read_bytes()) < 4000
+    done = subprocess.run([sys.executable, str(PROJECT_ROOT / "tangle.py"), "--root", str(root)],
+                          capture_output=True, text=True, timeout=120, preexec_fn=limit_memory)
+    assert done.returncode == 2, done.stderr[-2000:]
+    assert done.stderr.startswith("tangle.py: error: literate/a.md:1: chunk <<src/ident/m.py>> expands to about")
+    assert len(done.stderr.splitlines()) == 1 and "Traceback" not in done.stderr
+    assert not (root / "src").exists()
+
+
+def test_an_interrupt_midway_puts_everything_back_and_leaves_no_temporary(tmp_path, monkeypatch, capsys) -> None:
+    root = generated_project(tmp_path)
+    (root / "literate/a.md").write_text(chunk("<<src/ident/m.py>>=", "a = 2") + chunk("<<src/ident/n.py>>=", "b = 2")
+                                        + chunk("<<src/ident/sub/o.py>>=", "c = 2"))
+    before = snapshot(root)
+    real_replace = os.replace
+    calls = []
+
+    def interrupted_replace(source, target):
+        calls.append(target)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        real_replace(source, target)
+
+    monkeypatch.setattr(tangle.os, "replace", interrupted_replace)
+    with pytest.raises(KeyboardInterrupt):
+        tangle.write(root, tangle.tangle(root)[0])
+    monkeypatch.undo()
+    assert snapshot(root) == before and not (root / "src/ident/sub").exists()
+    calls.clear()
+    monkeypatch.setattr(tangle.os, "replace", interrupted_replace)
+    try:
+        status = tangle.main(["--root", str(root)])
+    except KeyboardInterrupt:  # the command line must turn it into its exit status
+        status = None
+    monkeypatch.undo()
+    assert status == 130 and capsys.readouterr().err == "tangle.py: interrupted; src/ident/ is left as it was\n"
+    assert snapshot(root) == before
+
+
+def test_an_interrupt_while_writing_a_temporary_leaves_none(tmp_path, monkeypatch) -> None:
+    root = generated_project(tmp_path)
+    (root / "literate/a.md").write_text(chunk("<<src/ident/m.py>>=", "a = 2") + chunk("<<src/ident/n.py>>=", "b = 2"))
+    before = snapshot(root)
+    real_open = Path.open
+
+    def interrupted_open(self, *args, **kwargs):
+        handle = real_open(self, *args, **kwargs)
+        if self.name == ".n.py.tangle-new":
+            handle.write("b = ")  # part of the file is on disk when the interrupt comes
+            handle.close()
+            raise KeyboardInterrupt
+        return handle
+
+    monkeypatch.setattr(Path, "open", interrupted_open)
+    with pytest.raises(KeyboardInterrupt):
+        tangle.write(root, tangle.tangle(root)[0])
+    monkeypatch.undo()
+    assert snapshot(root) == before
+
+
+def test_temporaries_a_killed_run_left_are_removed_by_the_next(tmp_path) -> None:
+    root = generated_project(tmp_path)
+    (root / "src/ident/.m.py.tangle-new").write_text("a = ")  # killed while writing
+    (root / "src/ident/notes.tangle-new.txt").write_text("mine\n")  # not a name the tangler gives
+    assert tangle.main(["--root", str(root)]) == 0
+    assert not (root / "src/ident/.m.py.tangle-new").exists()
+    assert (root / "src/ident/notes.tangle-new.txt").read_text() == "mine\n"
+    assert tangle.main(["--root", str(root), "--check"]) == 0

@@ -9,9 +9,11 @@ from __future__ import annotations
 
 import html.parser
 import json
+import os
 import re
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -125,7 +127,9 @@ def small(tmp_path_factory) -> tuple[Path, Path, dict]:
     out.mkdir()
     (out / "README.md").write_text("kept\n")
     (out / "figures").mkdir()
-    (out / "figures" / "stale.png").write_bytes(b"old")
+    (out / "figures" / "stale.png").write_bytes(b"old")  # an earlier weave's, as its manifest says
+    (out / "figures" / "mine.png").write_bytes(b"user")  # the user's own
+    (out / weave.MANIFEST).write_text(weave.manifest_text(["figures/stale.png"]), encoding="utf-8")
     summary = weave.Weave(root, out).run()
     return root, out, summary
 
@@ -186,6 +190,7 @@ def test_pages_index_and_style_are_written(small) -> None:
     assert (out / "style.css").is_file() and ".highlight" in read(out, "style.css")
     assert read(out, "README.md") == "kept\n"  # not written by the weave: left alone
     assert not (out / "figures" / "stale.png").exists()  # an earlier weave's figure is removed
+    assert (out / "figures" / "mine.png").read_bytes() == b"user"  # a file no weave wrote stays
     assert summary["pages"] == 2 and summary["examples"] == 4 and summary["values"] == 0
 
 
@@ -246,7 +251,7 @@ def test_examples_show_their_output_and_figures(small) -> None:
     assert ">42</pre>" in first  # the examples of a document share a namespace
     assert ">False</pre>" in second  # ... and each document has its own
     assert "the figure folder is docs/figures" in first  # paths printed by examples are stable
-    figures = sorted(p.name for p in (out / "figures").iterdir())
+    figures = sorted(p.name for p in (out / "figures").iterdir() if p.name != "mine.png")  # the user's own
     assert figures == ["01-first-binds-a-figure-and-uses-the-namespace.png", "01-first-prints-and-plots.png",
                        "own-figure.png"]
     for name in figures:
@@ -826,3 +831,237 @@ def test_misplaced_markup_and_missing_documents_are_warnings_with_their_line(tmp
         "literate/01-a.md:7: warning: a link to 09-gone.md, which is not a literate document",
     ]
     assert 'class="part-name"' not in read(tmp_path / "out", "01-a.html")
+
+
+# --------------------------------------------------------------------------------------------
+# issue 32 (the literate tools): the weave removes or replaces only files it wrote itself, an
+# interrupted weave leaves no partial file, a bad --root or --out is refused first, and a chunk that
+# expands exponentially is refused with a clear error
+
+
+def user_files(out: Path) -> dict[str, bytes]:
+    """A user's own files in the places the weave writes to."""
+    files = {"figures/mine.png": b"\x89PNG user", "figures/sub/deep.png": b"deep", "notebooks/mine.ipynb": b"{}",
+             "notebooks/notes.txt": b"notes", "notes.html": b"<html>my own page</html>", "README.md": b"kept",
+             "daisy/table.csv": b"a,b"}
+    for name, data in files.items():
+        (out / name).parent.mkdir(parents=True, exist_ok=True)
+        (out / name).write_bytes(data)
+    return files
+
+
+def weave_at(root: Path, out: Path, *options: str) -> int:
+    return weave.main(["--root", str(root), "--out", str(out), *options])
+
+
+def test_a_users_files_in_the_output_folder_are_never_removed(tmp_path) -> None:
+    root = make_project(tmp_path / "project")
+    out = tmp_path / "out"
+    mine = user_files(out)  # before the first weave: no manifest yet
+    assert weave_at(root, out) == 0
+    assert weave_at(root, out, "--no-notebooks") == 0  # a weave that writes fewer files
+    assert weave_at(root, out) == 0
+    assert {name: (out / name).read_bytes() for name in mine} == mine
+
+
+def test_the_manifest_lists_what_the_weave_wrote_and_its_stale_files_go(tmp_path) -> None:
+    root = make_project(tmp_path / "project")
+    out = tmp_path / "out"
+    assert weave_at(root, out) == 0
+    written = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file() and p.name != weave.MANIFEST)
+    manifest = json.loads((out / weave.MANIFEST).read_text(encoding="utf-8"))
+    assert manifest == {"generator": weave.GENERATOR, "files": written}
+    assert "figures/own-figure.png" in written and "notebooks/01-first.ipynb" in written
+    mine = user_files(out)
+    (root / "literate/01-first.md").write_text(FIRST.replace('own.savefig(Path(os.environ["IDENT_FIGURES"]) / '
+                                                             '"own-figure.png")', ""), encoding="utf-8")
+    assert weave_at(root, out, "--no-notebooks") == 0
+    assert not (out / "figures/own-figure.png").exists() and not (out / "notebooks/01-first.ipynb").exists()
+    assert {name: (out / name).read_bytes() for name in mine} == mine
+    manifest = json.loads((out / weave.MANIFEST).read_text(encoding="utf-8"))
+    assert "figures/own-figure.png" not in manifest["files"] and "notebooks/mine.ipynb" not in manifest["files"]
+
+
+def test_without_a_manifest_the_marked_pages_and_what_they_link_to_are_the_weaves(tmp_path) -> None:
+    """A folder woven before the weave kept a manifest (docs/ up to issue 32): the pages carrying the
+    weave's mark, the style sheet and the figures and notebooks those pages link to are its own."""
+    root = make_project(tmp_path / "project")
+    out = tmp_path / "out"
+    assert weave_at(root, out) == 0
+    (out / weave.MANIFEST).unlink()
+    mine = user_files(out)
+    (root / "literate/01-first.md").write_text(FIRST.replace('own.savefig(Path(os.environ["IDENT_FIGURES"]) / '
+                                                             '"own-figure.png")', ""), encoding="utf-8")
+    (root / "literate/02-second.md").unlink()
+    assert weave_at(root, out, "--no-notebooks") == 0
+    assert not (out / "figures/own-figure.png").exists()  # linked from the earlier page: the weave's
+    assert not (out / "02-second.html").exists() and not (out / "notebooks/02-second.ipynb").exists()
+    assert {name: (out / name).read_bytes() for name in mine} == mine
+
+
+@pytest.mark.parametrize("name, data", [
+    ("index.html", b"<html>my own index</html>"),  # no weave's mark
+    ("style.css", b"body { color: red }"),
+    ("notebooks/01-first.ipynb", b"{}"),
+    ("figures/own-figure.png", b"mine"),  # known only once the examples ran
+    ("02-second.html", None),  # a folder where a page belongs
+])
+def test_a_file_the_weave_did_not_write_is_not_replaced(tmp_path, capsys, name, data) -> None:
+    root = make_project(tmp_path / "project")
+    out = tmp_path / "out"
+    if data is None:
+        (out / name).mkdir(parents=True)
+    else:
+        (out / name).parent.mkdir(parents=True, exist_ok=True)
+        (out / name).write_bytes(data)
+    before = snapshot(out)
+    capsys.readouterr()
+    assert weave_at(root, out) == 2
+    error = capsys.readouterr().err.splitlines()[-1]  # after the warnings of the small project
+    assert error.startswith(f"weave: error: --out {out.resolve()}: 1 file(s) the weave writes exist there")
+    assert f"manifest.json): {name}; move them away" in error
+    assert snapshot(out) == before and (out / name).exists() and sorted(p.name for p in out.iterdir()) == sorted(
+        {name.split("/")[0]})
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out-weave-")]
+
+
+def test_a_manifest_naming_other_files_removes_none_of_them(tmp_path, capsys) -> None:
+    root = make_project(tmp_path / "project")
+    out = tmp_path / "out"
+    assert weave_at(root, out) == 0
+    mine = user_files(out)
+    (tmp_path / "outside.txt").write_text("outside\n")
+    (out / "figures/link.png").symlink_to(tmp_path / "outside.txt")
+    hostile = ["../outside.txt", str(tmp_path / "outside.txt"), "README.md", "daisy/table.csv", "notes.html",
+               "figures/link.png", "figures/../README.md", "notebooks/notes.txt", weave.MANIFEST]
+    (out / weave.MANIFEST).write_text(weave.manifest_text(hostile), encoding="utf-8")
+    capsys.readouterr()
+    assert weave_at(root, out) == 0
+    assert "lists names the weave does not write, left alone" in capsys.readouterr().err
+    assert {name: (out / name).read_bytes() for name in mine} == mine
+    assert (out / "figures/link.png").is_symlink() and (tmp_path / "outside.txt").read_text() == "outside\n"
+
+
+@pytest.mark.parametrize("text", ["not json", '{"files": ["figures/mine.png"]}', '["figures/mine.png"]',
+                                  '{"generator": "ident weave.py", "files": "figures/mine.png"}', "\udcff"])
+def test_a_damaged_manifest_is_a_warning_and_removes_nothing_unmarked(tmp_path, capsys, text) -> None:
+    root = make_project(tmp_path / "project")
+    out = tmp_path / "out"
+    mine = user_files(out)
+    (out / weave.MANIFEST).write_text(text, encoding="utf-8", errors="surrogateescape")
+    capsys.readouterr()
+    assert weave_at(root, out) == 0
+    assert f"{out.resolve() / weave.MANIFEST}: not a manifest of the weave" in capsys.readouterr().err
+    assert {name: (out / name).read_bytes() for name in mine} == mine
+    assert json.loads((out / weave.MANIFEST).read_text(encoding="utf-8"))["generator"] == weave.GENERATOR
+
+
+@pytest.mark.parametrize("failure", [KeyboardInterrupt, OSError])
+def test_an_install_interrupted_midway_leaves_the_output_as_it_was(tmp_path, monkeypatch, capsys, failure) -> None:
+    root = make_project(tmp_path / "project")
+    out = tmp_path / "out"
+    assert weave_at(root, out) == 0
+    user_files(out)
+    (root / "literate/01-first.md").write_text(FIRST.replace("hello <world>", "hello again"), encoding="utf-8")
+    (root / "literate/02-second.md").unlink()  # a stale page to remove as well
+    before = snapshot(out)
+    real_replace, moved = os.replace, []
+
+    def replace(source, target):
+        if Path(target).is_relative_to(out.resolve()) and len(moved) < 3:  # not the moves that put back
+            moved.append(target)
+            if len(moved) == 3:  # the manifest and one file are in place
+                raise failure(28, "No space left on device") if failure is OSError else failure()
+        real_replace(source, target)
+
+    monkeypatch.setattr(weave.os, "replace", replace)
+    try:
+        status = weave_at(root, out)
+    except KeyboardInterrupt:  # the command line must turn it into its exit status
+        status = None
+    monkeypatch.undo()
+    assert len(moved) == 3
+    assert status == (130 if failure is KeyboardInterrupt else 1)
+    error = capsys.readouterr().err
+    assert "left as it was" in error and "Traceback" not in error
+    assert snapshot(out) == before
+    assert not [p for p in tmp_path.rglob("*") if ".weave-new" in p.name or p.name.startswith(".out-weave-")]
+
+
+def test_sigterm_interrupts_the_weave_and_leaves_nothing_behind(tmp_path) -> None:
+    waiting = tmp_path / "waiting"
+    slow = FIRST.replace("shared = 41", f"shared = 41\nimport pathlib, time\npathlib.Path({str(waiting)!r}).touch()\n"
+                                        "time.sleep(600)")
+    root = make_project(tmp_path / "project", first=slow)
+    out = tmp_path / "out"
+    mine = user_files(out)
+    process = subprocess.Popen([sys.executable, str(PROJECT_ROOT / "weave.py"), "--root", str(root), "--out", str(out)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        for _ in range(1200):  # until the example runs (at most a minute)
+            if waiting.exists() or process.poll() is not None:
+                break
+            time.sleep(0.05)
+        assert waiting.exists(), process.communicate(timeout=60)
+        process.terminate()
+        _, err = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    assert process.returncode == 130 and f"weave: interrupted; {out} is left as it was" in err
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()) == sorted(mine)
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out-weave-")]
+
+
+def test_bad_root_and_out_are_refused_before_anything_runs(tmp_path, capsys) -> None:
+    root = make_project(tmp_path / "project")
+    missing = tmp_path / "nowhere"
+    assert weave.main(["--root", str(missing)]) == 2
+    assert capsys.readouterr().err == f"weave: error: --root {missing}: no such folder\n"
+    assert not missing.exists()  # no docs/ made inside it
+    (tmp_path / "empty").mkdir()
+    assert weave.main(["--root", str(tmp_path / "empty")]) == 2
+    assert "has no literate/ folder" in capsys.readouterr().err and not (tmp_path / "empty/docs").exists()
+    (tmp_path / "a-file").write_text("mine\n")
+    assert weave_at(root, tmp_path / "a-file") == 2
+    assert capsys.readouterr().err == f"weave: error: --out {tmp_path / 'a-file'} exists and is not a folder; " \
+                                      "name a folder (it is made if missing)\n"
+    assert (tmp_path / "a-file").read_text() == "mine\n"
+    assert weave_at(root, tmp_path / "a-file" / "docs") == 2
+    assert capsys.readouterr().err == f"weave: error: --out {tmp_path / 'a-file' / 'docs'}: {tmp_path / 'a-file'} " \
+                                      "is a file, not a folder; name a folder\n"
+    assert (tmp_path / "a-file").read_text() == "mine\n"
+
+
+def test_temporaries_a_killed_weave_left_are_removed_by_the_next(tmp_path) -> None:
+    root = make_project(tmp_path / "project")
+    out = tmp_path / "out"
+    assert weave_at(root, out) == 0
+    left = [f".{weave.MANIFEST}.weave-new", ".index.html.weave-new", "figures/.own-figure.png.weave-new"]
+    for name in left:
+        (out / name).write_bytes(b"half")
+    (out / ".notes.weave-new").write_bytes(b"mine")  # not a name the weave gives
+    assert weave_at(root, out) == 0
+    assert not [name for name in left if (out / name).exists()] and (out / ".notes.weave-new").read_bytes() == b"mine"
+
+
+def test_an_exponential_chunk_stops_the_weave_with_the_clear_error(tmp_path) -> None:
+    root = tmp_path / "project"
+    (root / "literate").mkdir(parents=True)
+    fence = "```"
+    doc = f"{fence}python .noeval\n# <<src/ident/m.py>>=\n<<c0>>\n{fence}\n"
+    doc += "".join(f"{fence}python .noeval\n# <<c{k}>>=\n<<c{k + 1}>>\n<<c{k + 1}>>\n{fence}\n" for k in range(60))
+    doc += f"{fence}python .noeval\n# <<c60>>=\nx = 1\n{fence}\n"
+    (root / "literate/01-a.md").write_text(doc, encoding="utf-8")
+    assert len(doc) < 4000
+    resource = pytest.importorskip("resource")
+
+    def limit_memory() -> None:  # a MemoryError, not a machine out of memory, if the limit is missing
+        resource.setrlimit(resource.RLIMIT_AS, (2**31, 2**31))
+
+    done = subprocess.run([sys.executable, str(PROJECT_ROOT / "weave.py"), "--root", str(root), "--out",
+                           str(tmp_path / "out")], capture_output=True, text=True, timeout=120, preexec_fn=limit_memory)
+    assert done.returncode == 1, done.stderr[-2000:]
+    assert done.stderr.startswith("weave: error: literate/01-a.md:1: chunk <<src/ident/m.py>> expands to about "
+                                  "10^18 lines")
+    assert "MAX_EXPANDED_LINES" in done.stderr and len(done.stderr.splitlines()) == 1
+    assert not (tmp_path / "out").exists()
