@@ -452,8 +452,8 @@ def dask_executor(workers: int | None = None, *, scheduler: str | None = None, t
     if workers is not None:
         checked_integer("workers", workers, 1, max_local_workers(),
                         why=f" (the number of worker processes of a local cluster: at most {MAX_WORKERS_PER_CPU} "
-                            f"per processor, and this process may use {usable_cpus()}; more belong on a "
-                            "cluster, see scheduler=)")
+                            f"per processor, and this process may use {usable_cpus()}; more workers belong on a "
+                            "cluster, reached through its scheduler)")
     elif not isinstance(scheduler, str) or not scheduler.strip():
         raise TypeError(f"scheduler must be the address of a Dask scheduler as a string, e.g. "
                         f"'tcp://host:8786'; got {scheduler!r}")
