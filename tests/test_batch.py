@@ -1,16 +1,20 @@
 """ident.batch: many identifications through an executor, the same results wherever they run.
 
 The Dask tests need ``distributed`` (in the ``test`` extra) and skip without it. Each starts a local
-cluster of two worker processes: a few seconds, kept to three clusters in the module.
+cluster of two worker processes (one, in the test of a job that cannot be pickled): a few seconds,
+kept to four clusters in the module.
 """
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
 import dataclasses
+import http.server
 import multiprocessing
 import os
 import pickle
 import signal
+import socket
 import sys
 import threading
 import time
@@ -252,7 +256,7 @@ def test_jobs_are_submitted_largest_first_and_returned_in_order() -> None:
 
 def test_dask_executor_arguments_are_checked() -> None:
     for kwargs, error, message in [
-        ({"workers": 0}, ValueError, r"workers must satisfy 1 <= workers \(the number of worker processes\), got 0"),
+        ({"workers": 0}, ValueError, r"workers must satisfy 1 <= workers <= \d+ \(the number of worker processes of a local cluster.*got 0"),
         ({"workers": -2}, ValueError, "got -2"),
         ({"workers": 1.5}, TypeError, "workers must be an integer"),
         ({}, ValueError, "give either workers=N .* got neither"),
@@ -397,3 +401,230 @@ def test_the_daisy_runner_on_a_dask_cluster_writes_the_serial_files(tmp_path) ->
     second = daisy_report.write_results(remote, tmp_path / "dask")
     for key in ("markdown", "csv", "json", "figure"):
         assert first[key].read_bytes() == second[key].read_bytes(), key
+
+
+# --------------------------------------------------------------------------------------------
+# issue 32, hostile inputs round three (batches and Dask): finished work is kept, nothing hangs,
+# a local cluster is bounded by the machine
+
+
+def small_jobs(labels) -> list[Job]:
+    rng = np.random.default_rng(12)
+    w = trajectory(rng, random_system(1, 1, 1, rng), 80)
+    return [Job(w, 1, 1, label=label) for label in labels]
+
+
+class Immediate:
+    """An executor that runs each job at once in this process; `special` maps a job's label to what its
+    future does instead: "pending" (never finishes), "interrupt" (Ctrl-C while it is awaited) or an
+    exception that submit raises (as Dask does for a job it cannot pickle)."""
+
+    def __init__(self, special):
+        self.special, self.futures = special, {}
+
+    def submit(self, function, job):
+        what = self.special.get(job.label)
+        if isinstance(what, Exception):
+            raise what
+        future = Interrupting() if what == "interrupt" else concurrent.futures.Future()
+        if what is None:
+            future.set_result(function(job))
+        self.futures[job.label] = future
+        return future
+
+
+class Interrupting(concurrent.futures.Future):
+    def result(self, timeout=None):
+        signal.raise_signal(signal.SIGINT)  # Python's handler raises KeyboardInterrupt here, as on Ctrl-C
+        raise AssertionError("SIGINT did not interrupt")
+
+
+def test_a_job_that_cannot_be_submitted_fails_alone() -> None:
+    jobs = small_jobs(range(4))
+    cannot = TypeError("Could not serialize object of type Task")
+    cannot.__cause__ = TypeError("cannot pickle '_thread.lock' object")
+    results = run_jobs(jobs, Immediate({2: cannot}))
+    assert [r.ok for r in results] == [True, True, False, True] and [r.job for r in results] == jobs
+    assert results[2].error.startswith("TypeError (raised by the executor when the job was submitted): Could not "
+                                       "serialize object of type Task (because TypeError: cannot pickle")
+
+
+@pytest.mark.parametrize("where", ["process pool", "dask"])
+def test_an_unpicklable_job_fails_alone_on_a_real_executor(where) -> None:
+    jobs = small_jobs([0, 1, 2])
+    jobs[1] = Job(jobs[1].w, 1, 1, label=threading.Lock())  # a label that no pickle can carry
+    expected = run_jobs(jobs)
+    if where == "dask":
+        pytest.importorskip("distributed")
+        executor = dask_executor(workers=1)
+    else:
+        context = multiprocessing.get_context("spawn")
+        executor = concurrent.futures.ProcessPoolExecutor(max_workers=1, mp_context=context)
+    with executor as running:
+        results = run_jobs(jobs, running)
+    assert [r.ok for r in results] == [True, False, True]
+    assert "raised by the executor" in results[1].error and "pickle" in results[1].error
+    for first, second in zip(expected[::2], results[::2]):
+        assert_identical(first, second)
+
+
+def test_ctrl_c_while_waiting_keeps_the_finished_results() -> None:
+    from ident.batch import CANCELLED, JobsInterrupted
+    jobs = small_jobs(range(5))  # equal sizes: submitted in order
+    executor = Immediate({1: "interrupt", 3: "pending"})
+    with pytest.raises(JobsInterrupted, match="3 of 5 jobs had finished") as caught:
+        run_jobs(jobs, executor)
+    assert isinstance(caught.value, KeyboardInterrupt)  # a program that does not catch it stops as on Ctrl-C
+    results = caught.value.results
+    assert [r.job for r in results] == jobs and [r.ok for r in results] == [True, False, True, False, True]
+    assert results[1].error == results[3].error == CANCELLED  # 4 finished while job 1 was awaited: kept
+    assert executor.futures[3].cancelled()  # the unfinished job does not go on running
+    again = pickle.loads(pickle.dumps(caught.value))
+    assert [r.ok for r in again.results] == [r.ok for r in results]
+
+
+def test_ctrl_c_in_a_serial_run_keeps_the_finished_results(monkeypatch) -> None:
+    from ident import batch
+    from ident.batch import CANCELLED, JobsInterrupted
+    calls = []
+
+    def interrupted_third(*args, **options):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return ident(*args, **options)
+
+    monkeypatch.setattr(batch, "ident", interrupted_third)
+    jobs = small_jobs(range(4))
+    with pytest.raises(JobsInterrupted, match="2 of 4 jobs had finished") as caught:
+        run_jobs(jobs)
+    assert [r.ok for r in caught.value.results] == [True, True, False, False]
+    assert caught.value.results[2].error == CANCELLED and caught.value.results[0].job is jobs[0]
+
+
+def test_a_local_cluster_is_bounded_by_the_machine_before_dask_is_imported(monkeypatch) -> None:
+    from ident.batch import MAX_WORKERS_PER_CPU, max_local_workers
+    usable = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    assert max_local_workers() == MAX_WORKERS_PER_CPU * usable
+    monkeypatch.setitem(sys.modules, "distributed", None)  # nothing of Dask may be touched
+    for workers in (10**6, max_local_workers() + 1):
+        with pytest.raises(ValueError, match=rf"workers must satisfy 1 <= workers <= {max_local_workers()} "
+                                             rf"\(the number of worker processes of a local cluster.*got {workers}"):
+            with dask_executor(workers=workers):
+                pass
+
+
+def test_the_command_line_bounds_workers_before_any_cluster(monkeypatch, tmp_path, capsys) -> None:
+    distributed = pytest.importorskip("distributed")
+    from ident import cli
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a local cluster was started")
+
+    monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
+    status = cli.main(["daisy", "erie", "--workers", "1000000", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert status == 2 and "--workers: workers must satisfy 1 <= workers <=" in err and "got 1000000" in err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err and not (tmp_path / "out").exists()
+
+
+@contextlib.contextmanager
+def not_a_scheduler(kind: str):
+    """A local address that accepts TCP connections and is no Dask scheduler: a silent server, or HTTP."""
+    if kind == "http":
+        class Quiet(http.server.BaseHTTPRequestHandler):
+            def do_GET(self):
+                self.send_response(200)
+                self.end_headers()
+                self.wfile.write(b"<html>a dashboard</html>")
+
+            def log_message(self, *args):
+                pass
+
+        server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Quiet)
+        thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+        thread.start()
+        try:
+            yield f"tcp://127.0.0.1:{server.server_address[1]}"
+        finally:
+            server.shutdown()
+            server.server_close()
+        return
+    listener = socket.create_server(("127.0.0.1", 0))
+    listener.settimeout(0.1)
+    accepted, done = [], threading.Event()
+
+    def accept_and_stay_silent():
+        while not done.is_set():
+            try:
+                accepted.append(listener.accept()[0])
+            except OSError:  # the timeout: look at done again
+                pass
+
+    thread = threading.Thread(target=accept_and_stay_silent, daemon=True)
+    thread.start()
+    try:
+        yield f"tcp://127.0.0.1:{listener.getsockname()[1]}"
+    finally:
+        done.set()
+        thread.join(timeout=5)
+        listener.close()
+        for connection in accepted:
+            connection.close()
+
+
+def within(seconds: float, function):
+    """What function() returned or raised, from a daemon thread given `seconds`: a call that hangs fails
+    the test instead of hanging it."""
+    outcome = {}
+
+    def call():
+        try:
+            outcome["returned"] = function()
+        except BaseException as error:  # handed to the test
+            outcome["raised"] = error
+
+    thread = threading.Thread(target=call, daemon=True)
+    thread.start()
+    thread.join(seconds)
+    assert not thread.is_alive(), f"still waiting after {seconds} s"
+    return outcome
+
+
+def enter_dask_executor(**arguments):
+    with dask_executor(**arguments):
+        pass
+
+
+@pytest.mark.parametrize("kind", ["silent", "http"])
+def test_an_address_that_is_no_scheduler_is_reported_within_the_timeout(kind) -> None:
+    pytest.importorskip("distributed")
+    with not_a_scheduler(kind) as address:  # Dask alone waited for minutes (for ever, in principle)
+        outcome = within(30, lambda: enter_dask_executor(scheduler=address, timeout=2))
+    with pytest.raises(ConnectionError, match=rf"cannot reach the Dask scheduler at '{address}' within 2 s "
+                                              r".*no answer as a Dask scheduler"):
+        raise outcome.get("raised") or AssertionError(f"no error: {outcome}")
+
+
+def test_daisy_scheduler_that_is_no_scheduler_exits_2_within_its_timeout(monkeypatch, tmp_path, capsys) -> None:
+    pytest.importorskip("distributed")
+    from ident import cli
+    monkeypatch.setattr(cli, "SCHEDULER_TIMEOUT", 2.0)
+    with not_a_scheduler("http") as address:
+        status = within(30, lambda: cli.main(["daisy", "erie", "--scheduler", address, "--out",
+                                              str(tmp_path / "out")])).get("returned")
+    err = capsys.readouterr().err
+    assert status == 2 and f"--scheduler: cannot reach the Dask scheduler at '{address}' within 2 s" in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
+
+
+def test_a_running_scheduler_is_used_and_a_workers_address_named() -> None:
+    distributed = pytest.importorskip("distributed")
+    in_process = dict(n_workers=1, processes=False, threads_per_worker=1, dashboard_address=None)
+    with distributed.LocalCluster(**in_process) as cluster:
+        with dask_executor(scheduler=cluster.scheduler_address, timeout=10) as executor:
+            assert run_jobs(small_jobs([0]), executor)[0].ok
+        worker = next(iter(cluster.scheduler_info["workers"]))
+        with pytest.raises(ValueError, match=rf"scheduler '{worker}' answers as a Dask Worker, not as a scheduler"):
+            with dask_executor(scheduler=worker, timeout=5):
+                pass

@@ -2,6 +2,7 @@
 HTTP server, never the internet) and a smoke test of the Section 4 runner."""
 from __future__ import annotations
 
+import concurrent.futures
 import contextlib
 import csv
 import dataclasses
@@ -12,9 +13,13 @@ import io
 import json
 import re
 import shutil
+import signal
 import socket
 import sys
 import threading
+import time
+import tracemalloc
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -419,3 +424,176 @@ def test_runner_with_the_papers_single_start(shared):
     assert single.modes["eiv"].misfit == pytest.approx(default.modes["eiv"].candidates[0].misfit, rel=1e-12)
     # printed (and kept) to five significant digits
     assert single.modes["eiv"].misfit <= daisy_runner.REFERENCE_MISFIT["robot_arm"] * (1 + 5e-5)
+
+
+# --- issue 32, hostile inputs round three (the download and the runner): bounded downloads, finished
+# --- sets kept ----------------------------------------------------------------------------------------
+
+def _gzip_bomb(single_member: bool) -> bytes:
+    """A few hundred KB to a MB of gzip that expands to 256 MiB (one member) or 1 GiB (64 members of 16 MiB)."""
+    if single_member:
+        compressor, zeros = zlib.compressobj(9, zlib.DEFLATED, 16 + zlib.MAX_WBITS), bytes(2**20)
+        return b"".join([compressor.compress(zeros) for _ in range(256)] + [compressor.flush()])
+    return gzip.compress(bytes(2**24), compresslevel=9) * 64
+
+
+@pytest.mark.parametrize("single_member", [True, False])
+def test_a_gzip_bomb_is_refused_while_streaming(single_member, no_environment, tmp_path):
+    root = tmp_path / "server"
+    target = root / daisy.dataset("erie").path
+    target.parent.mkdir(parents=True)
+    target.write_bytes(_gzip_bomb(single_member))
+    cache = tmp_path / "cache"
+    with _serving(root) as url:
+        tracemalloc.start()
+        try:
+            with pytest.raises(daisy.DownloadError, match=rf"erie.dat.gz holds more than {daisy.MAX_FILE_BYTES} "
+                                                          "bytes once decompressed: not a DAISY data file"):
+                daisy.data_file("erie", cache, url=url)
+            peak = tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+    assert peak < 4 * daisy.MAX_FILE_BYTES  # never the gigabyte the payload asks for
+    assert _leftovers(cache) == []
+
+
+def test_an_oversized_plain_file_is_refused(no_environment, tmp_path):
+    root = tmp_path / "plain"
+    target = root / daisy.dataset("erie").path
+    target.parent.mkdir(parents=True)
+    target.write_bytes(b"1 2 3\n" * (daisy.MAX_FILE_BYTES // 6 + 1000))  # a table, but too large for DAISY
+    with _serving(root) as url:
+        with pytest.raises(daisy.DownloadError, match=rf"holds more than {daisy.MAX_FILE_BYTES} bytes: not a DAISY"):
+            daisy.data_file("erie", tmp_path / "cache", url=url)
+    assert _leftovers(tmp_path / "cache") == []
+
+
+def test_gzip_members_and_truncation(shared, no_environment, tmp_path):
+    content = (shared / "erie.dat").read_bytes()
+    root = tmp_path / "server"
+    target = root / daisy.dataset("erie").path
+    target.parent.mkdir(parents=True)
+    target.write_bytes(gzip.compress(content[:10_000]) + gzip.compress(content[10_000:]))  # two members
+    with _serving(root) as url:
+        assert daisy.data_file("erie", tmp_path / "cache", url=url).read_bytes() == content
+        target.write_bytes(gzip.compress(content)[:-100])  # cut short
+        with pytest.raises(daisy.DownloadError, match="not a valid gzip file"):
+            daisy.data_file("erie", tmp_path / "other", url=url)
+    assert _leftovers(tmp_path / "other") == []
+
+
+class _Trickling(http.server.BaseHTTPRequestHandler):
+    """Promises a megabyte and sends a byte every 0.2 s: no single read ever times out."""
+
+    def do_GET(self):
+        self.send_response(200)
+        self.send_header("Content-Length", str(2**20))
+        self.end_headers()
+        for _ in range(150):  # 30 s at most, then the connection closes
+            try:
+                self.wfile.write(b"1")
+                self.wfile.flush()
+            except OSError:
+                return
+            time.sleep(0.2)
+
+    def log_message(self, *args):
+        pass
+
+
+def test_a_trickling_server_is_given_up_after_the_download_deadline(no_environment, monkeypatch, tmp_path):
+    monkeypatch.setattr(daisy, "MAX_DOWNLOAD_SECONDS", 1.0)
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), _Trickling)
+    server.daemon_threads = True
+    thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    try:
+        started = time.monotonic()
+        with pytest.raises(daisy.DownloadError, match="did not finish downloading within 1 s"):
+            daisy.download("erie", tmp_path / "cache", url=f"http://127.0.0.1:{server.server_address[1]}/", timeout=5)
+        assert time.monotonic() - started < 15
+    finally:
+        server.shutdown()
+        server.server_close()
+    assert _leftovers(tmp_path / "cache") == []
+
+
+def test_a_large_wrong_local_file_is_refused_without_reading_it_into_memory(no_environment, tmp_path):
+    folder = tmp_path / "data"
+    folder.mkdir()
+    with open(folder / "erie.dat", "wb") as wrong:
+        wrong.truncate(256 * 2**20)  # sparse: no disk used
+    tracemalloc.start()
+    try:
+        with pytest.raises(daisy.ChecksumError, match="erie.dat has SHA-256"):
+            daisy.data_file("erie", folder, download_missing=False)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 32 * 2**20
+    assert (folder / "erie.dat").stat().st_size == 256 * 2**20  # the user's file is left as it was
+
+
+class _InProcess:
+    """An executor that runs each job here at once; `special` maps (set, mode) to an exception that submit
+    raises (Dask pickles in submit), an exception the job's future holds (a worker lost), "pending", or
+    "interrupt" (Ctrl-C while its result is awaited)."""
+
+    def __init__(self, special):
+        self.special, self.futures = special, {}
+
+    def submit(self, function, name, mode, *args):
+        what = self.special.get((name, mode))
+        if isinstance(what, TypeError):
+            raise what
+        future = _Interrupting() if what == "interrupt" else concurrent.futures.Future()
+        if isinstance(what, Exception):
+            future.set_exception(what)
+        elif what is None:
+            future.set_result(function(name, mode, *args))
+        self.futures[name, mode] = future
+        return future
+
+
+class _Interrupting(concurrent.futures.Future):
+    def result(self, timeout=None):
+        signal.raise_signal(signal.SIGINT)  # Python's handler raises KeyboardInterrupt here, as on Ctrl-C
+        raise AssertionError("SIGINT did not interrupt")
+
+
+def test_what_the_executor_cannot_do_fails_that_mode_alone(shared):
+    special = {("erie", "eiv"): TypeError("Could not serialize object of type Task"),
+               ("destill", "oe"): OSError("the worker died 3 times on this task")}
+    results = daisy_runner.run_benchmark(["erie", "destill"], directory=shared, download_missing=False,
+                                         progress=None, executor=_InProcess(special))
+    erie, destill = results
+    assert erie.modes["oe"].model is not None and destill.modes["eiv"].model is not None
+    assert erie.modes["eiv"].model is None and erie.modes["eiv"].fit == 0
+    assert erie.modes["eiv"].account == ("identification failed: the executor could not run it (TypeError: Could "
+                                         "not serialize object of type Task)")
+    assert "(OSError: the worker died 3 times on this task)" in destill.modes["oe"].account
+
+
+def test_ctrl_c_keeps_the_finished_sets(shared, monkeypatch):
+    # on an executor: erie finished in both modes (destill, submitted first, is interrupted while awaited)
+    executor = _InProcess({("destill", "eiv"): "interrupt", ("destill", "oe"): "pending"})
+    with pytest.raises(daisy_runner.BenchmarkInterrupted, match="interrupted with 1 of 2 sets finished") as caught:
+        daisy_runner.run_benchmark(["erie", "destill"], directory=shared, download_missing=False, progress=None,
+                                   executor=executor, modes=["eiv", "oe"])
+    assert isinstance(caught.value, KeyboardInterrupt)
+    assert [r.name for r in caught.value.results] == ["erie"]
+    assert all(x.model is not None for x in caught.value.results[0].modes.values())
+    assert executor.futures["destill", "oe"].cancelled()  # not left running
+    # serially: the second set is interrupted
+    run_set = daisy_runner.run_set
+
+    def interrupted_destill(name, **options):
+        if name == "destill":
+            raise KeyboardInterrupt
+        return run_set(name, **options)
+
+    monkeypatch.setattr(daisy_runner, "run_set", interrupted_destill)
+    with pytest.raises(daisy_runner.BenchmarkInterrupted, match="1 of 3 sets finished") as caught:
+        daisy_runner.run_benchmark(["erie", "destill", "robot_arm"], directory=shared, download_missing=False,
+                                   progress=None, modes=["oe"])
+    assert [r.name for r in caught.value.results] == ["erie"] and caught.value.results[0].modes["oe"].fit > 0

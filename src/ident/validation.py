@@ -23,7 +23,7 @@ __all__ = ["fit_percent", "validate", "Validation", "errors_in_variables", "spec
            "LagCurve", "plot_lag_curves", "choose_lag", "LagChoice"]
 
 
-# <<centre and split the data for validation>>= literate/14-daisy-runner.md:555
+# <<centre and split the data for validation>>= literate/14-daisy-runner.md:631
 @dataclasses.dataclass(frozen=True)
 class ValidationSplit:
     """w = [u y] centred and split into the identification and the validation part."""
