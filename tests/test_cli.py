@@ -691,3 +691,31 @@ def test_a_data_file_that_is_a_fifo_is_refused_without_blocking(command, tmp_pat
     os.mkfifo(fifo)
     argv = [command, fifo, "--inputs", 0, "--outputs", 1] + (["--lag", 1] if command == "identify" else [])
     refused_before_writing(argv, capsys, tmp_path, f"{fifo} is not a regular file (a FIFO, device or socket)")
+
+
+# --- issue 32: an interrupted daisy run keeps the sets it finished, beside the complete results ----------
+
+def test_an_interrupted_daisy_run_saves_its_finished_sets_beside_the_results(tmp_path, capsys, monkeypatch):
+    from ident import daisy_runner
+    model = random_system(1, 1, 1, np.random.default_rng(1))
+    mode = daisy_runner.ModeResult("eiv", "lra", 1.0, 3, 0.1, True, 90.0, [90.0], 90.0, 91.0, 0.5, 2.0, "", [],
+                                   model)
+    finished = [daisy_runner.SetResult("erie", 1, 57, 5, 2, 1, 40, 17, None, {"eiv": mode})]
+
+    def interrupted(*args, **kwargs):
+        raise daisy_runner.BenchmarkInterrupted(finished, 3)
+
+    monkeypatch.setattr(daisy_runner, "run_benchmark", interrupted)
+    out_folder = tmp_path / "out"
+    out_folder.mkdir()
+    (out_folder / "table.md").write_text("previous table")
+    status, _, err = run(["daisy", "--out", out_folder, "--quiet"], capsys)
+    assert status == 130 and "the 1 of 3 sets that had finished are in" in err
+    assert (out_folder / "table.md").read_text() == "previous table"  # the complete results are untouched
+    saved = out_folder / cli.INTERRUPTED_FOLDER
+    assert sorted(p.name for p in saved.iterdir()) == sorted(cli.DAISY_FILES)
+    assert "erie" in (saved / "table.md").read_text()
+    monkeypatch.setattr(daisy_runner, "run_benchmark",
+                        lambda *a, **k: (_ for _ in ()).throw(daisy_runner.BenchmarkInterrupted([], 3)))
+    status, _, err = run(["daisy", "--out", tmp_path / "other", "--quiet"], capsys)
+    assert status == 130 and "before any set had finished" in err and not (tmp_path / "other").exists()
