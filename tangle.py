@@ -544,10 +544,10 @@ def inside(folder: Path, path: Path) -> bool:
 TEMPORARY_SUFFIX = ".tangle-new"
 
 
-def temporary_beside(path: Path) -> Path:
-    """The tangler's temporary file for ``path``: in the same folder (so that ``os.replace`` moves it
-    into place in one step, and a reader sees the old file or the new one, never part of one)."""
-    return path.with_name(f".{path.name}{TEMPORARY_SUFFIX}")
+def temporary_beside(path: Path, suffix: str = TEMPORARY_SUFFIX) -> Path:
+    """The temporary file for ``path``: in the same folder (so that ``os.replace`` moves it into place in
+    one step, and a reader sees the old file or the new one, never part of one)."""
+    return path.with_name(f".{path.name}{suffix}")
 
 
 def remove_leftover_temporaries(package: Path) -> None:
@@ -559,14 +559,27 @@ def remove_leftover_temporaries(package: Path) -> None:
                     path.unlink()
 
 
-def replace_bytes(path: Path, data: bytes) -> None:
+def replace_bytes(path: Path, data: bytes, suffix: str = TEMPORARY_SUFFIX) -> None:
     """Write ``data`` to ``path`` through a temporary beside it: the file is whole at every moment."""
-    temporary = temporary_beside(path)
+    temporary = temporary_beside(path, suffix)
     try:
         temporary.write_bytes(data)
         os.replace(temporary, path)
     finally:
         temporary.unlink(missing_ok=True)
+
+
+def put_back(undo: list, made: list, suffix: str = TEMPORARY_SUFFIX) -> None:
+    """Undo a write that failed or was interrupted: each (path, previous bytes or None for a new file)
+    in reverse order, then the folders it made if they are empty again."""
+    for path, previous in reversed(undo):
+        if previous is None:
+            path.unlink(missing_ok=True)
+        else:
+            replace_bytes(path, previous, suffix)
+    for folder in reversed(made):
+        if folder.is_dir() and not any(folder.iterdir()):
+            folder.rmdir()
 
 
 def write(root: Path, outputs: dict[str, str], origins: dict[str, Location] | None = None) -> list[str]:
@@ -622,14 +635,7 @@ def write(root: Path, outputs: dict[str, str], origins: dict[str, Location] | No
     except BaseException as error:  # an OSError, or an interrupt (Ctrl-C): put everything back first
         for temporary in temporaries:
             temporary.unlink(missing_ok=True)
-        for path, previous in reversed(undo):
-            if previous is None:
-                path.unlink(missing_ok=True)
-            else:
-                replace_bytes(path, previous)
-        for folder in reversed(made):
-            if folder.is_dir() and not any(folder.iterdir()):
-                folder.rmdir()
+        put_back(undo, made)
         if not isinstance(error, OSError):
             raise
         raise TangleError(f"{culprit(current)}cannot write {current} ({error.strerror or error}); "

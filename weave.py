@@ -1466,10 +1466,13 @@ def read_manifest(out: Path, warn) -> list[str] | None:
     return [name for name in files if weave_like(name)]
 
 
+WEAVE_TEMPORARY_SUFFIX = ".weave-new"  # .NAME.weave-new beside NAME while it is written
+
+
 def remove_leftover_temporaries(out: Path) -> None:
     """Remove the temporaries of ``replace_bytes`` that a killed weave left (only names it gives)."""
-    for path in out.rglob(".*.weave-new"):
-        folder, _, base = path.relative_to(out).as_posix().removesuffix(".weave-new").rpartition("/")
+    for path in out.rglob(f".*{WEAVE_TEMPORARY_SUFFIX}"):
+        folder, _, base = path.relative_to(out).as_posix().removesuffix(WEAVE_TEMPORARY_SUFFIX).rpartition("/")
         name = (folder + "/" if folder else "") + base.removeprefix(".")
         if (weave_like(name) or name == MANIFEST) and path.is_file() and not path.is_symlink():
             with contextlib.suppress(OSError):  # housekeeping: one it cannot remove does no harm
@@ -1477,13 +1480,8 @@ def remove_leftover_temporaries(out: Path) -> None:
 
 
 def replace_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary beside it: the file is whole at every moment."""
-    temporary = path.with_name(f".{path.name}.weave-new")
-    try:
-        temporary.write_bytes(data)
-        os.replace(temporary, path)
-    finally:
-        temporary.unlink(missing_ok=True)
+    """Write ``data`` to ``path`` through a temporary beside it (tangle's, with the weave's suffix)."""
+    tangle.replace_bytes(path, data, WEAVE_TEMPORARY_SUFFIX)
 
 
 class Weave:
@@ -1683,14 +1681,7 @@ class Weave:
             current = MANIFEST
             self.replace(MANIFEST, manifest_text(new), undo)
         except BaseException as error:
-            for path, data in reversed(undo):
-                if data is None:
-                    path.unlink(missing_ok=True)
-                else:
-                    replace_bytes(path, data)
-            for folder in reversed(made):
-                if folder.is_dir() and not any(folder.iterdir()):
-                    folder.rmdir()
+            tangle.put_back(undo, made, WEAVE_TEMPORARY_SUFFIX)
             if not isinstance(error, OSError):
                 raise
             raise WeaveError(f"cannot write {self.out / current} ({error.strerror or error}); "
