@@ -7,6 +7,7 @@ After I. Markovsky, "System identification by structured low-rank approximation"
 generated from the literate documents in ``literate/`` by ``python tangle.py``.
 """
 from ident.batch import Job, JobResult, dask_executor, run_jobs
+from ident.continuous import to_continuous
 from ident.hankel import block_hankel, mosaic_hankel, time_major_permutation
 from ident.identification import IdentInfo, Reduction, ident, misfit
 from ident.model_file import load_model
@@ -22,6 +23,7 @@ __all__ = [
     "misfit_vs_lag", "choose_lag", "LagChoice", "load_model", "balanced_truncation", "kernel_misfit", "Structure",
     "SLRAWarning",
     "MisfitWarning",
+    "to_continuous",
     "InfeasibleKernelError", "kernel_to_ss", "ss_to_kernel", "block_hankel", "mosaic_hankel",
     "time_major_permutation", "Job", "JobResult", "run_jobs", "dask_executor",
 ]
