@@ -351,6 +351,32 @@ CASES += [
      TypeError, 'label must be a str'),
 ]
 
+# --- issue 31, continuous time (to_continuous): the model, its sample time, the method, the poles --------
+from ident.continuous import to_continuous  # noqa: E402
+
+SYS_CONTINUOUS = control.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]])
+
+CASES += [
+    ('to_continuous transfer function', lambda: to_continuous(control.tf([1], [1, -0.5], 1)),
+     TypeError, 'sys must be a control.StateSpace, got TransferFunction'),
+    ('to_continuous unspecified sample time', lambda: to_continuous(control.ss(SYS.A, SYS.B, SYS.C, SYS.D, True)),
+     ValueError, 'unspecified sample time \\(dt=True\\): to_continuous needs it'),
+    ('to_continuous continuous model', lambda: to_continuous(SYS_CONTINUOUS),
+     ValueError, 'sys is a continuous-time model already \\(dt=0\\)'),
+    ('to_continuous method', lambda: to_continuous(SYS, method='foh'),
+     ValueError, "method must be one of \\('zoh', 'tustin'\\), got 'foh'"),
+    ('to_continuous method type', lambda: to_continuous(SYS, method=None),
+     TypeError, "method must be one of .*got None"),
+    ('to_continuous negative real pole', lambda: to_continuous(control.ss([[-0.5]], [[1.0]], [[1.0]], [[0.0]], 1)),
+     ValueError, 'discrete pole\\(s\\) -0.5\\+0j at 0 or on the negative real axis: no real continuous-time'),
+    ('to_continuous zero pole', lambda: to_continuous(control.ss([[0.0, 1.0], [0.0, 0.5]], [[0.0], [1.0]], [[1.0, 0.0]], [[0.0]], 1)),
+     ValueError, 'discrete pole\\(s\\) 0\\+0j at 0 or on the negative real axis'),
+    ('to_continuous tustin pole at -1', lambda: to_continuous(control.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]], 1), 'tustin'),
+     ValueError, "discrete pole\\(s\\) -1\\+0j at -1: Tustin's rule maps them to infinity"),
+    ('to_continuous non-finite', lambda: to_continuous(SYS_NAN),
+     ValueError, 'A contains non-finite entries'),
+]
+
 @pytest.mark.parametrize("name, call, error, words", CASES, ids=[c[0] for c in CASES])
 def test_bad_input_is_refused_clearly(name, call, error, words) -> None:
     with pytest.raises(error, match=words) as caught:
