@@ -918,3 +918,53 @@ def test_the_blas_limit_holds_in_initial_states_and_is_undone_after(monkeypatch)
         after = [lib["num_threads"] for lib in threadpoolctl.threadpool_info() if lib["user_api"] == "blas"]
     assert seen and all(threads == [1] * len(threads) for threads in seen), seen
     assert after == [2] * len(after)
+
+
+# --- issue 31, roles by name and saving models: save_model refuses before writing anything ----------
+
+from types import SimpleNamespace  # noqa: E402
+
+from ident import save_model  # noqa: E402
+
+SAVE_CASES = [
+    ('save_model to a number', lambda path: save_model(3, SYS), TypeError, r"path must be a path"),
+    ('save_model of an array', lambda path: save_model(path, SYS.A), TypeError,
+     r"sysh must be a control.StateSpace, got ndarray"),
+    ('save_model of NaN matrices', lambda path: save_model(path, SYS_NAN), ValueError,
+     r"A holds non-finite values"),
+    ('save_model of a continuous-time model', lambda path: save_model(path, control.ss(SYS.A, SYS.B, SYS.C, SYS.D)),
+     ValueError, r"the model's sample time dt must be a positive finite number"),
+    ('save_model: offset not an Offset', lambda path: save_model(path, SYS, offset=[0.0, 1.0, 2.0]), TypeError,
+     r"offset must be an Offset .* got list"),
+    ('save_model: offset of the wrong size', lambda path: save_model(
+        path, SYS, offset=SimpleNamespace(inputs=[0.0], outputs=[1.0])), ValueError,
+     r"offset.outputs must be 2 real numbers \(one per model output\), got \[1.0\]"),
+    ('save_model: offset of text', lambda path: save_model(
+        path, SYS, offset=SimpleNamespace(inputs=["0"], outputs=[1.0, 2.0])), ValueError,
+     r"offset.inputs must be 1 real numbers"),
+    ('save_model: a NaN offset', lambda path: save_model(
+        path, SYS, offset=SimpleNamespace(inputs=[np.nan], outputs=[1.0, 2.0])), ValueError,
+     r"offset.inputs holds non-finite values"),
+    ('save_model: info a list', lambda path: save_model(path, SYS, info=[1]), TypeError,
+     r"info must be an IdentInfo or a dict"),
+    ('save_model: info replacing A', lambda path: save_model(path, SYS, info={"A": 1}), ValueError,
+     r"info's keys must be text other than the model's own .* got 'A'"),
+    ('save_model: info not JSON', lambda path: save_model(path, SYS, info={"when": object()}), ValueError,
+     r"info holds an entry that is not finite JSON"),
+    ('save_model: info with NaN', lambda path: save_model(path, SYS, info={"fit": float("nan")}), ValueError,
+     r"info holds an entry that is not finite JSON"),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", SAVE_CASES, ids=[c[0] for c in SAVE_CASES])
+def test_save_model_refuses_before_writing(tmp_path, name, call, error, words) -> None:
+    path = tmp_path / "model.json"
+    path.write_text("the previous file")
+    test_bad_input_is_refused_clearly(name, lambda: call(path), error, words)
+    assert path.read_text() == "the previous file" and [p.name for p in tmp_path.iterdir()] == ["model.json"]
+
+
+def test_save_model_to_a_folder_is_refused_and_leaves_nothing(tmp_path) -> None:
+    with pytest.raises(IsADirectoryError, match="is a folder"):
+        save_model(tmp_path, SYS)
+    assert list(tmp_path.iterdir()) == []

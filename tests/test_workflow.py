@@ -462,3 +462,41 @@ def test_the_third_order_two_by_two_plant_of_the_issue() -> None:
     fit = validate(reduced, w[700:, :2], w[700:, 2:]).mean_fit
     assert fit > validate(plant, w[700:, :2], w[700:, 2:]).mean_fit - 1
     assert info.M <= 1.2 * misfit(w[:700], plant)[0]
+
+
+# -- issue 31, roles by name and saving models: save_model and load_model round trip -----------------
+
+def test_save_model_round_trips_matrices_names_dt_and_offset_bit_for_bit(tmp_path) -> None:
+    from types import SimpleNamespace
+
+    from ident import save_model
+
+    rng = np.random.default_rng(31)
+    plant = random_system(2, 1, 3, rng)
+    sysh = make_ss(plant.A / 3, plant.B, plant.C, plant.D, 0.025, inputs=["valve", "fan"], outputs=["temp"])
+    offset = SimpleNamespace(inputs=np.array([0.1, 1 / 3]), outputs=np.array([np.pi * 1e-7]))  # an Offset's fields
+    path = tmp_path / "model.json"
+    save_model(path, sysh, offset=offset, info={"lag": 3, "note": "dryer"})
+    saved = load_model(path)
+    for name in "ABCD":  # the same floats through JSON's repr: equal, not close
+        assert np.array_equal(np.asarray(getattr(saved.model, name)), np.asarray(getattr(sysh, name))), name
+    assert saved.model.dt == 0.025
+    assert list(saved.model.input_labels) == ["valve", "fan"] and list(saved.model.output_labels) == ["temp"]
+    assert np.array_equal(saved.input_means, offset.inputs) and np.array_equal(saved.output_means, offset.outputs)
+    assert saved.info == {"lag": 3, "note": "dryer"}
+
+
+def test_save_model_writes_an_identified_model_with_its_info_and_replaces_a_file_whole(tmp_path) -> None:
+    from ident import save_model
+
+    _, w = noisy_data()
+    sysh, info, _, _ = ident(pd.DataFrame(w, columns=["u", "y"]), 1, 2)
+    path = tmp_path / "model.json"
+    path.write_text("an older file")
+    save_model(str(path), sysh, info=info)
+    saved = load_model(path)
+    assert np.allclose(saved.input_means, 0) and np.allclose(saved.output_means, 0)
+    assert saved.model.input_labels == ["u"] and saved.model.output_labels == ["y"] and saved.model.dt == 1
+    assert saved.info["start"] == info.start and saved.info["iterations"] == info.iter
+    assert saved.info["misfit"] == pytest.approx(info.M, rel=1e-15)
+    assert [p.name for p in tmp_path.iterdir()] == ["model.json"]  # no temporary file left beside it

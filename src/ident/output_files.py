@@ -123,7 +123,7 @@ def write_all(files) -> None:
         for path, option, writer in files:
             target = Path(os.path.realpath(path))
             with _reported(path, option):
-                staged.append(_Staged(_temporary_beside(target), target, Path(path), option, _new_file_mode()))
+                staged.append(_Staged(temporary_beside(target), target, Path(path), option, new_file_mode()))
                 writer(staged[-1].temporary)
         _move_into_place(staged)
     finally:
@@ -195,7 +195,7 @@ def _put_back(replaced) -> list[str]:
     return lost
 
 
-def _temporary_beside(target: Path) -> Path:
+def temporary_beside(target: Path) -> Path:
     """A new empty file in the folder of `target`, with its suffix (a plot's type is read from it)."""
     descriptor, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".partial{target.suffix}",
                                         dir=target.parent)
@@ -219,7 +219,7 @@ def _backup(target: Path) -> Path | None:
     return backup
 
 
-def _new_file_mode() -> int:
+def new_file_mode() -> int:
     """The permissions of a new file under the umask (mkstemp's files are private, 0o600)."""
     mask = os.umask(0o022)
     os.umask(mask)
