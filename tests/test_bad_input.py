@@ -968,3 +968,56 @@ def test_save_model_to_a_folder_is_refused_and_leaves_nothing(tmp_path) -> None:
     with pytest.raises(IsADirectoryError, match="is a folder"):
         save_model(tmp_path, SYS)
     assert list(tmp_path.iterdir()) == []
+
+
+# --- issue 31, roles by name and saving models: inputs= and outputs= --------------------------------
+
+from ident import choose_lag  # noqa: E402
+
+ROLE_CASES = [
+    ('ident: a name for an array', lambda: ident(W, ell=1, inputs=["u"]), TypeError,
+     r"inputs must be column positions of w \(integers from 0; column names only when w is a DataFrame\), got 'u'"),
+    ('ident: a position beyond w', lambda: ident(W, ell=1, outputs=[3]), ValueError,
+     r"outputs: column 3 is not a column of w \(its positions are 0 \.\. 2\)"),
+    ('ident: a negative position', lambda: ident(W, ell=1, inputs=[-1]), ValueError,
+     r"inputs: column -1 is not a column of w"),
+    ('ident: a column twice', lambda: ident(W, ell=1, inputs=[0, 0]), ValueError,
+     r"inputs names the column\(s\) 0 more than once"),
+    ('ident: a column in neither', lambda: ident(W, ell=1, inputs=[0], outputs=[1]), ValueError,
+     r"w's column\(s\) 2 are in neither inputs nor outputs: give every column a role"),
+    ('ident: a column in both', lambda: ident(W, ell=1, inputs=[0, 1], outputs=[1, 2]), ValueError,
+     r"inputs and outputs both name 1: a variable is an input or an output"),
+    ('ident: no output left', lambda: ident(W, ell=1, outputs=[]), ValueError,
+     r"outputs: no column of w is left as an output"),
+    ('ident: m disagrees', lambda: ident(W, 2, 1, inputs=[0]), ValueError,
+     r"inputs names 1 input\(s\), but m = 2: they must agree"),
+    ('ident: neither m nor roles', lambda: ident(W, ell=1), TypeError,
+     r"m, the number of inputs, must be given \(or inputs= or outputs=, which imply it\)"),
+    ('ident: a name not a column', lambda: ident(FRAME, ell=1, inputs=["speed"]), ValueError,
+     r"inputs names 'speed', which is not a column of w"),
+    ('ident: frame, a name twice', lambda: ident(FRAME, ell=1, outputs=["angle", "angle"]), ValueError,
+     r"outputs names the column\(s\) 'angle' more than once"),
+    ('compare: more inputs than sys has', lambda: compare(W, SYS, inputs=[0, 1]), ValueError,
+     r"inputs names 2 input\(s\), but sys's number of inputs = 1"),
+    ('compare: roles against a named model', lambda: compare(FRAME, NAMED, inputs=["angle"]), ValueError,
+     r"inputs and outputs make \['angle'\] the inputs of w, but sys's inputs are \['force'\]"),
+    ('resid: a column in neither', lambda: resid(W, SYS, inputs=[0], outputs=[2]), ValueError,
+     r"w's column\(s\) 1 are in neither inputs nor outputs"),
+    ('misfit: outputs imply 2 inputs', lambda: misfit(W, SYS, outputs=[0]), ValueError,
+     r"inputs names 2 input\(s\), but sysh's number of inputs = 1"),
+    ('misfit: roles against a named model', lambda: misfit(FRAME, NAMED, outputs=["force", "angle"]), ValueError,
+     r"make \['position'\] the inputs of w, but sysh's inputs are \['force'\]"),
+    ('choose_lag: a name for an array', lambda: choose_lag(W, lags=[1], inputs=["u"]), TypeError,
+     r"inputs must be column positions of w"),
+    ('choose_lag: m disagrees', lambda: choose_lag(W, 1, [1], outputs=[2]), ValueError,
+     r"inputs names 2 input\(s\), but m = 1"),
+    ('misfit_vs_lag: m disagrees', lambda: misfit_vs_lag(W, 2, [1], inputs=[0]), ValueError,
+     r"inputs names 1 input\(s\), but m = 2"),
+    ('misfit_vs_lag: neither m nor roles', lambda: misfit_vs_lag(W, lags=[1]), TypeError,
+     r"m, the number of inputs, must be given"),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", ROLE_CASES, ids=[c[0] for c in ROLE_CASES])
+def test_bad_roles_are_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

@@ -190,7 +190,7 @@ def with_roles(series: list[np.ndarray], form: DataForm, inputs, outputs, m, nam
         raise ValueError(f"inputs names {len(input_vars)} input(s), but {m_text} = {m!r}: they must agree "
                          "(m may be left out)")
     order = input_vars + output_vars
-    texts = column_texts(form, order)
+    texts = [] if form.columns is None else [str(form.columns[j]) for j in order]
     return [array[:, order] for array in series], dataclasses.replace(
         form, columns=None if form.columns is None else form.columns[order],
         takes=tuple(tuple(take[j] for j in order) for take in form.takes) if form.takes else (
