@@ -944,3 +944,106 @@ def test_the_blas_limit_holds_in_initial_states_and_is_undone_after(monkeypatch)
         after = [lib["num_threads"] for lib in threadpoolctl.threadpool_info() if lib["user_api"] == "blas"]
     assert seen and all(threads == [1] * len(threads) for threads in seen), seen
     assert after == [2] * len(after)
+
+
+# --- issue 31, roles by name and saving models: save_model refuses before writing anything ----------
+
+from types import SimpleNamespace  # noqa: E402
+
+from ident import save_model  # noqa: E402
+
+SAVE_CASES = [
+    ('save_model to a number', lambda path: save_model(3, SYS), TypeError, r"path must be a path"),
+    ('save_model of an array', lambda path: save_model(path, SYS.A), TypeError,
+     r"sysh must be a control.StateSpace, got ndarray"),
+    ('save_model of NaN matrices', lambda path: save_model(path, SYS_NAN), ValueError,
+     r"A holds non-finite values"),
+    ('save_model of a continuous-time model', lambda path: save_model(path, control.ss(SYS.A, SYS.B, SYS.C, SYS.D)),
+     ValueError, r"the model's sample time dt must be a positive finite number"),
+    ('save_model: offset not an Offset', lambda path: save_model(path, SYS, offset=[0.0, 1.0, 2.0]), TypeError,
+     r"offset must be an Offset .* got list"),
+    ('save_model: offset of the wrong size', lambda path: save_model(
+        path, SYS, offset=SimpleNamespace(inputs=[0.0], outputs=[1.0])), ValueError,
+     r"offset.outputs must be 2 real numbers \(one per model output\), got \[1.0\]"),
+    ('save_model: offset of text', lambda path: save_model(
+        path, SYS, offset=SimpleNamespace(inputs=["0"], outputs=[1.0, 2.0])), ValueError,
+     r"offset.inputs must be 1 real numbers"),
+    ('save_model: a NaN offset', lambda path: save_model(
+        path, SYS, offset=SimpleNamespace(inputs=[np.nan], outputs=[1.0, 2.0])), ValueError,
+     r"offset.inputs holds non-finite values"),
+    ('save_model: info a list', lambda path: save_model(path, SYS, info=[1]), TypeError,
+     r"info must be an IdentInfo or a dict"),
+    ('save_model: info replacing A', lambda path: save_model(path, SYS, info={"A": 1}), ValueError,
+     r"info's keys must be text other than the model's own .* got 'A'"),
+    ('save_model: info not JSON', lambda path: save_model(path, SYS, info={"when": object()}), ValueError,
+     r"info holds an entry that is not finite JSON"),
+    ('save_model: info with NaN', lambda path: save_model(path, SYS, info={"fit": float("nan")}), ValueError,
+     r"info holds an entry that is not finite JSON"),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", SAVE_CASES, ids=[c[0] for c in SAVE_CASES])
+def test_save_model_refuses_before_writing(tmp_path, name, call, error, words) -> None:
+    path = tmp_path / "model.json"
+    path.write_text("the previous file")
+    test_bad_input_is_refused_clearly(name, lambda: call(path), error, words)
+    assert path.read_text() == "the previous file" and [p.name for p in tmp_path.iterdir()] == ["model.json"]
+
+
+def test_save_model_to_a_folder_is_refused_and_leaves_nothing(tmp_path) -> None:
+    with pytest.raises(IsADirectoryError, match="is a folder"):
+        save_model(tmp_path, SYS)
+    assert list(tmp_path.iterdir()) == []
+
+
+# --- issue 31, roles by name and saving models: inputs= and outputs= --------------------------------
+
+from ident import choose_lag  # noqa: E402
+
+ROLE_CASES = [
+    ('ident: a name for an array', lambda: ident(W, ell=1, inputs=["u"]), TypeError,
+     r"inputs must be column positions of w \(integers from 0; column names only when w is a DataFrame\), got 'u'"),
+    ('ident: a position beyond w', lambda: ident(W, ell=1, outputs=[3]), ValueError,
+     r"outputs: column 3 is not a column of w \(its positions are 0 \.\. 2\)"),
+    ('ident: a negative position', lambda: ident(W, ell=1, inputs=[-1]), ValueError,
+     r"inputs: column -1 is not a column of w"),
+    ('ident: a column twice', lambda: ident(W, ell=1, inputs=[0, 0]), ValueError,
+     r"inputs names the column\(s\) 0 more than once"),
+    ('ident: a column in neither', lambda: ident(W, ell=1, inputs=[0], outputs=[1]), ValueError,
+     r"w's column\(s\) 2 are in neither inputs nor outputs: give every column a role"),
+    ('ident: a column in both', lambda: ident(W, ell=1, inputs=[0, 1], outputs=[1, 2]), ValueError,
+     r"inputs and outputs both name 1: a variable is an input or an output"),
+    ('ident: no output left', lambda: ident(W, ell=1, outputs=[]), ValueError,
+     r"outputs: no column of w is left as an output"),
+    ('ident: m disagrees', lambda: ident(W, 2, 1, inputs=[0]), ValueError,
+     r"inputs names 1 input\(s\), but m = 2: they must agree"),
+    ('ident: neither m nor roles', lambda: ident(W, ell=1), TypeError,
+     r"m, the number of inputs, must be given \(or inputs= or outputs=, which imply it\)"),
+    ('ident: a name not a column', lambda: ident(FRAME, ell=1, inputs=["speed"]), ValueError,
+     r"inputs names 'speed', which is not a column of w"),
+    ('ident: frame, a name twice', lambda: ident(FRAME, ell=1, outputs=["angle", "angle"]), ValueError,
+     r"outputs names the column\(s\) 'angle' more than once"),
+    ('compare: more inputs than sys has', lambda: compare(W, SYS, inputs=[0, 1]), ValueError,
+     r"inputs names 2 input\(s\), but sys's number of inputs = 1"),
+    ('compare: roles against a named model', lambda: compare(FRAME, NAMED, inputs=["angle"]), ValueError,
+     r"inputs and outputs make \['angle'\] the inputs of w, but sys's inputs are \['force'\]"),
+    ('resid: a column in neither', lambda: resid(W, SYS, inputs=[0], outputs=[2]), ValueError,
+     r"w's column\(s\) 1 are in neither inputs nor outputs"),
+    ('misfit: outputs imply 2 inputs', lambda: misfit(W, SYS, outputs=[0]), ValueError,
+     r"inputs names 2 input\(s\), but sysh's number of inputs = 1"),
+    ('misfit: roles against a named model', lambda: misfit(FRAME, NAMED, outputs=["force", "angle"]), ValueError,
+     r"make \['position'\] the inputs of w, but sysh's inputs are \['force'\]"),
+    ('choose_lag: a name for an array', lambda: choose_lag(W, lags=[1], inputs=["u"]), TypeError,
+     r"inputs must be column positions of w"),
+    ('choose_lag: m disagrees', lambda: choose_lag(W, 1, [1], outputs=[2]), ValueError,
+     r"inputs names 2 input\(s\), but m = 1"),
+    ('misfit_vs_lag: m disagrees', lambda: misfit_vs_lag(W, 2, [1], inputs=[0]), ValueError,
+     r"inputs names 1 input\(s\), but m = 2"),
+    ('misfit_vs_lag: neither m nor roles', lambda: misfit_vs_lag(W, lags=[1]), TypeError,
+     r"m, the number of inputs, must be given"),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", ROLE_CASES, ids=[c[0] for c in ROLE_CASES])
+def test_bad_roles_are_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

@@ -40,7 +40,7 @@ def test_identify_prints_and_writes(data_csv, tmp_path, capsys):
     status, out, err = run(["identify", data_csv, "--inputs", "u1,u2", "--outputs", "y", "--lag", 2,
                             "--exact", "inputs", "--model", model, "--plot", plot], capsys)
     assert status == 0, err
-    assert "identified from 210 samples" in out and "exact: 0, 1" in out
+    assert "identified from 210 samples" in out and "exact: u1, u2" in out
     assert "misfit M =" in out and "validation fit on the last 90 samples" in out and "A =" in out
     saved = json.loads(model.read_text())
     assert {"A", "B", "C", "D", "means", "misfit", "fit"} <= saved.keys()
@@ -102,7 +102,7 @@ def test_identify_from_npz_with_u_and_y_and_default_outputs(tmp_path, capsys, mo
      "--model: the folder {tmp}/missing does not exist"),
     (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--model", "{tmp}"],
      "--model: {tmp} is a folder; give a file name"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--exact", "0,1"],
+    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--exact", "0,2"],
      "--exact: at most m = 1 columns can be exact"),
     (["identify", "{tmp}", "--inputs", "0", "--outputs", "2", "--lag", "1"], "is a folder, not a file"),
     (["daisy", "erie", "--maxiter", "-1"], "argument --maxiter: must be a non-negative integer, got -1"),
@@ -719,3 +719,32 @@ def test_an_interrupted_daisy_run_saves_its_finished_sets_beside_the_results(tmp
                         lambda *a, **k: (_ for _ in ()).throw(daisy_runner.BenchmarkInterrupted([], 3)))
     status, _, err = run(["daisy", "--out", tmp_path / "other", "--quiet"], capsys)
     assert status == 130 and "before any set had finished" in err and not (tmp_path / "other").exists()
+
+
+# --- issue 31, roles by name: --exact counts the file's columns, as --inputs and --outputs do --------
+
+def test_exact_columns_are_the_files_columns_and_are_printed_by_name(data_csv, tmp_path, capsys):
+    """--inputs 1 --outputs 2 --exact 1: file column 1 (u2), the only input, not w's second variable
+    (the output); the printout names it as the file does."""
+    model = tmp_path / "m.json"
+    status, out, err = run(["identify", data_csv, "--inputs", "1", "--outputs", "2", "--lag", "2", "--exact", "1",
+                            "--model", model, "--plot", tmp_path / "fit.png"], capsys)
+    assert status == 0, err
+    assert "exact: u2" in out
+    assert json.loads(model.read_text())["exact"] == [0]  # the model file: positions in [inputs outputs]
+    status, out, err = run(["identify", data_csv, "--inputs", "1", "--outputs", "2", "--lag", "2", "--exact", "u2",
+                            "--model", model, "--plot", tmp_path / "fit.png"], capsys)
+    assert status == 0 and "exact: u2" in out, err
+
+
+def test_exact_columns_not_chosen_are_refused_in_one_line(data_csv, tmp_path, capsys):
+    status, out, err = run(["identify", data_csv, "--inputs", "1", "--outputs", "2", "--lag", "2", "--exact", "0",
+                            "--model", tmp_path / "m.json", "--plot", tmp_path / "fit.png"], capsys)
+    assert status == 2 and len(err.strip().splitlines()) == 1, err
+    assert "--exact: column(s) 'u1' are neither --inputs nor --outputs" in err
+
+
+def test_the_help_says_how_columns_are_counted(capsys):
+    status, out, _ = run(["identify", "--help"], capsys)
+    out = " ".join(out.split())
+    assert status == 0 and "counted from 0" in out and "columns of the file as for --inputs" in out

@@ -462,3 +462,115 @@ def test_the_third_order_two_by_two_plant_of_the_issue() -> None:
     fit = validate(reduced, w[700:, :2], w[700:, 2:]).mean_fit
     assert fit > validate(plant, w[700:, :2], w[700:, 2:]).mean_fit - 1
     assert info.M <= 1.2 * misfit(w[:700], plant)[0]
+
+
+# -- issue 31, roles by name and saving models: save_model and load_model round trip -----------------
+
+def test_save_model_round_trips_matrices_names_dt_and_offset_bit_for_bit(tmp_path) -> None:
+    from types import SimpleNamespace
+
+    from ident import save_model
+
+    rng = np.random.default_rng(31)
+    plant = random_system(2, 1, 3, rng)
+    sysh = make_ss(plant.A / 3, plant.B, plant.C, plant.D, 0.025, inputs=["valve", "fan"], outputs=["temp"])
+    offset = SimpleNamespace(inputs=np.array([0.1, 1 / 3]), outputs=np.array([np.pi * 1e-7]))  # an Offset's fields
+    path = tmp_path / "model.json"
+    save_model(path, sysh, offset=offset, info={"lag": 3, "note": "dryer"})
+    saved = load_model(path)
+    for name in "ABCD":  # the same floats through JSON's repr: equal, not close
+        assert np.array_equal(np.asarray(getattr(saved.model, name)), np.asarray(getattr(sysh, name))), name
+    assert saved.model.dt == 0.025
+    assert list(saved.model.input_labels) == ["valve", "fan"] and list(saved.model.output_labels) == ["temp"]
+    assert np.array_equal(saved.input_means, offset.inputs) and np.array_equal(saved.output_means, offset.outputs)
+    assert saved.info == {"lag": 3, "note": "dryer"}
+
+
+def test_save_model_writes_an_identified_model_with_its_info_and_replaces_a_file_whole(tmp_path) -> None:
+    from ident import save_model
+
+    _, w = noisy_data()
+    sysh, info, _, _ = ident(pd.DataFrame(w, columns=["u", "y"]), 1, 2)
+    path = tmp_path / "model.json"
+    path.write_text("an older file")
+    save_model(str(path), sysh, info=info)
+    saved = load_model(path)
+    assert np.allclose(saved.input_means, 0) and np.allclose(saved.output_means, 0)
+    assert saved.model.input_labels == ["u"] and saved.model.output_labels == ["y"] and saved.model.dt == 1
+    assert saved.info["start"] == info.start and saved.info["iterations"] == info.iter
+    assert saved.info["misfit"] == pytest.approx(info.M, rel=1e-15)
+    assert [p.name for p in tmp_path.iterdir()] == ["model.json"]  # no temporary file left beside it
+
+
+# -- issue 31, roles by name and saving models: inputs= and outputs= ---------------------------------
+
+def roles_data():
+    """w = [u, y1, y2] of a 1-input, 2-output plant, and the same columns reordered [y2, u, y1]."""
+    rng = np.random.default_rng(7)
+    plant = random_system(1, 2, 1, rng)
+    u = rng.standard_normal((300, 1))
+    w = np.hstack([u, simulate(plant, u, rng.standard_normal(2))]) + 0.01 * rng.standard_normal((300, 3))
+    return w, w[:, [2, 0, 1]]
+
+
+def test_ident_with_roles_by_position_gives_the_fit_of_the_inputs_first_order_and_wh_in_the_callers() -> None:
+    w, shuffled = roles_data()
+    sysh, info, wh, xini = ident(w, 1, 1)
+    for roles in ({"inputs": [1], "outputs": [2, 0]}, {"inputs": [1]}, {"outputs": [2, 0]}):
+        sysh_r, info_r, wh_r, xini_r = ident(shuffled, ell=1, **roles)
+        assert sysh_r.ninputs == 1 and sysh_r.noutputs == 2
+        assert info_r.M == pytest.approx(info.M, rel=1e-9)  # the outputs' order does not change the misfit
+        np.testing.assert_allclose(wh_r, wh[:, [2, 0, 1]], rtol=0, atol=1e-9)  # the caller's column order
+        if roles.get("outputs") == [2, 0]:  # the outputs in w's order: the same model, state for state
+            np.testing.assert_allclose(xini_r, xini, rtol=0, atol=1e-9)
+            np.testing.assert_allclose(sysh_r.C, sysh.C, rtol=0, atol=1e-9)
+    assert ident(shuffled, 1, 1, inputs=[1], outputs=[2, 0])[1].M == pytest.approx(info.M, rel=1e-9)  # m agrees
+
+
+def test_ident_with_roles_by_name_names_the_model_and_maps_exct_and_wini() -> None:
+    w, _ = roles_data()
+    frame = pd.DataFrame(w, columns=["u", "a", "b"])
+    shuffled = frame[["b", "u", "a"]]
+    wini = np.ones((1, 3))
+    sysh, info, wh, _ = ident(frame, 1, 1, exct=["u"], wini=wini * [1, 2, 3])
+    sysh_r, info_r, wh_r, _ = ident(shuffled, ell=1, inputs=["u"], outputs=["a", "b"], exct=["u"],
+                                    wini=wini * [3, 1, 2])  # wini's columns are shuffled's too
+    assert list(sysh_r.input_labels) == ["u"] and list(sysh_r.output_labels) == ["a", "b"]
+    assert info_r.M == pytest.approx(info.M, rel=1e-9)
+    assert list(wh_r.columns) == ["b", "u", "a"]
+    np.testing.assert_allclose(wh_r[["u", "a", "b"]].to_numpy(), wh.to_numpy(), rtol=0, atol=1e-9)
+    assert np.allclose(wh_r["u"], shuffled["u"])  # the exact input is not corrected
+
+
+def test_compare_with_columns_in_another_order_gives_the_same_fit_as_in_the_models_order() -> None:
+    """Issue 31: by name for a named model; by position with inputs=/outputs= for arrays."""
+    w, shuffled = roles_data()
+    named, _, _, _ = ident(pd.DataFrame(w, columns=["u", "a", "b"]), 1, 1)
+    unnamed, _, _, _ = ident(w, 1, 1)
+    in_order = compare(pd.DataFrame(w, columns=["u", "a", "b"]), named).fit
+    assert np.all(in_order > 90)
+    np.testing.assert_allclose(compare(pd.DataFrame(shuffled, columns=["b", "u", "a"]), named).fit, in_order,
+                               rtol=1e-12)
+    np.testing.assert_allclose(compare(pd.DataFrame(shuffled, columns=["b", "u", "a"]), named, inputs=["u"]).fit,
+                               in_order, rtol=1e-12)
+    np.testing.assert_allclose(compare(shuffled, unnamed, inputs=[1], outputs=[2, 0]).fit, compare(w, unnamed).fit,
+                               rtol=1e-12)
+    np.testing.assert_allclose(resid(shuffled, unnamed, inputs=[1], outputs=[2, 0]).autocorrelation,
+                               resid(w, unnamed).autocorrelation, rtol=1e-9, atol=1e-12)
+    assert misfit(shuffled, unnamed, outputs=[2, 0])[0] == pytest.approx(misfit(w, unnamed)[0], rel=1e-9)
+
+
+def test_lag_functions_take_roles() -> None:
+    from ident import choose_lag, misfit_vs_lag
+
+    w, shuffled = roles_data()
+    choice, choice_r = choose_lag(w, 1, range(1, 4)), choose_lag(shuffled, lags=range(1, 4), inputs=[1], outputs=[2, 0])
+    assert choice_r.ell == choice.ell
+    np.testing.assert_allclose(choice_r.misfits, choice.misfits, rtol=1e-7)
+    curve = misfit_vs_lag(w[:200], 1, [1, 2], validation=w[200:])
+    curve_r = misfit_vs_lag(shuffled[:200], lags=[1, 2], inputs=[1], outputs=[2, 0], validation=shuffled[200:])
+    np.testing.assert_allclose(curve_r.misfit, curve.misfit, rtol=1e-7)
+    np.testing.assert_allclose(curve_r.fit, curve.fit, rtol=1e-7)
+    frame = pd.DataFrame(shuffled, columns=["b", "u", "a"])
+    curve_f = misfit_vs_lag(frame[:200], lags=[1, 2], inputs=["u"], outputs=["a", "b"], validation=frame[200:])
+    np.testing.assert_allclose(curve_f.fit, curve.fit, rtol=1e-7)
