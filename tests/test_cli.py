@@ -719,3 +719,23 @@ def test_an_interrupted_daisy_run_saves_its_finished_sets_beside_the_results(tmp
                         lambda *a, **k: (_ for _ in ()).throw(daisy_runner.BenchmarkInterrupted([], 3)))
     status, _, err = run(["daisy", "--out", tmp_path / "other", "--quiet"], capsys)
     assert status == 130 and "before any set had finished" in err and not (tmp_path / "other").exists()
+
+
+# --- issue 31 point 7 (the small edges): an option must be spelled whole ----------------------------------
+
+@pytest.mark.parametrize("argv, abbreviation", [
+    (["identify", "DATA", "--lag", 1, "--n", 1], "--n"),            # was read as --no-center
+    (["identify", "DATA", "--lag", 1, "--exa", "inputs"], "--exa"),  # was read as --exact
+    (["identify", "DATA", "--lag", 1, "--hold", 0.5], "--hold"),    # was read as --holdout
+    (["lag", "DATA", "--inputs", "u1,u2", "--outputs", "y", "--max", 5], "--max"),
+    (["daisy", "erie", "--work", 2], "--work"),
+    (["--trace", "identify", "DATA", "--lag", 1], "--trace"),
+])
+def test_an_abbreviated_option_is_refused(argv, abbreviation, data_csv, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    argv = [data_csv if a == "DATA" else a for a in argv]
+    before = snapshot(data_csv.parent)
+    status, out, err = run(argv, capsys)
+    assert status == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert f"unrecognized arguments: {abbreviation}" in err
+    assert snapshot(data_csv.parent) == before  # nothing was run, nothing written
