@@ -270,10 +270,24 @@ def test_dask_executor_arguments_are_checked() -> None:
 
 
 def test_without_dask_the_error_says_what_to_install(monkeypatch) -> None:
+    """The hint works from a clone too (issue 31): `pip install 'ident[distributed]'` would fetch the
+    package index's `ident`, another project."""
     monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed now raises ImportError
-    with pytest.raises(ImportError, match=r"pip install 'ident\[distributed\]'"):
+    with pytest.raises(ImportError) as raised:
         with dask_executor(workers=1):
             pass
+    message = str(raised.value)
+    assert "pip install 'dask[distributed]>=2024.1'" in message
+    assert "in a clone of ident's repository, pip install -e '.[distributed]'" in message
+    assert "'ident[distributed]'" not in message
+
+
+def test_the_dask_hint_installs_what_the_extra_installs() -> None:
+    tomllib = pytest.importorskip("tomllib")  # Python 3.11 on
+    from ident import batch
+
+    project = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text(encoding="utf-8"))
+    assert project["project"]["optional-dependencies"]["distributed"] == [batch.DASK_REQUIREMENT]
 
 
 def test_an_unreachable_scheduler_is_a_connection_error_naming_it() -> None:

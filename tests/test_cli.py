@@ -739,3 +739,13 @@ def test_an_abbreviated_option_is_refused(argv, abbreviation, data_csv, tmp_path
     assert status == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
     assert f"unrecognized arguments: {abbreviation}" in err
     assert snapshot(data_csv.parent) == before  # nothing was run, nothing written
+
+
+def test_daisy_workers_without_dask_says_what_works_from_a_clone(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed now raises ImportError
+    status, _, err = run(["daisy", "erie", "--workers", 1, "--data-dir", SHARED, "--no-download", "--quiet",
+                          "--out", tmp_path / "out"], capsys)
+    assert status == 2 and len(err.strip().splitlines()) == 1, err
+    assert "--workers: running jobs on Dask needs dask.distributed" in err
+    assert "pip install 'dask[distributed]>=2024.1'" in err and "pip install -e '.[distributed]'" in err
+    assert not (tmp_path / "out").exists()
