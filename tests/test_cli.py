@@ -1,6 +1,7 @@
 """ident.cli: identify, daisy and lag through main(argv); usage errors are one line with exit status 2."""
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import subprocess
@@ -749,3 +750,24 @@ def test_daisy_workers_without_dask_says_what_works_from_a_clone(tmp_path, capsy
     assert "--workers: running jobs on Dask needs dask.distributed" in err
     assert "pip install 'dask[distributed]>=2024.1'" in err and "pip install -e '.[distributed]'" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_daisy_on_two_workers_prints_nothing_of_dask(tmp_path):
+    """Dask's own log lines (nanny warnings on start and shutdown) and its warning that port 8787 is
+    taken (held here on purpose, as another cluster would) are not printed (issue 31)."""
+    pytest.importorskip("distributed")
+    if not (SHARED / "erie.dat").is_file():
+        pytest.skip(f"the DAISY files are not in {SHARED}")
+    import socket
+
+    with contextlib.ExitStack() as stack:
+        dashboard_port = stack.enter_context(socket.socket())
+        with contextlib.suppress(OSError):  # taken already: by another cluster, as it should be
+            dashboard_port.bind(("", 8787))
+            dashboard_port.listen()
+        done = subprocess.run([sys.executable, "-m", "ident", "daisy", "erie", "--workers", "2", "--data-dir", SHARED,
+                               "--no-download", "--quiet", "--maxiter", "5", "--out", tmp_path / "out"],
+                              capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == "", done.stderr
+    assert (tmp_path / "out" / "table.md").is_file()
