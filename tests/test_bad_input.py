@@ -1047,3 +1047,28 @@ ROLE_CASES = [
 @pytest.mark.parametrize("name, call, error, words", ROLE_CASES, ids=[c[0] for c in ROLE_CASES])
 def test_bad_roles_are_refused_clearly(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# --- issue 31 point 7 (the small edges): a feasible but ill-conditioned sys0 is said to be so -------------
+
+def test_an_ill_conditioned_sys0_is_refused_naming_the_accuracy_check() -> None:
+    """A stable sys0 (a triple pole at 0.99) on 1000 samples with the output corrected: Gamma is positive
+    definite, but too ill-conditioned for the cost; the error names the failed accuracy check with its
+    numbers, and never says the correction is not unique."""
+    from ident.representations import random_system, simulate
+    from ident.solver import IllConditionedKernelError
+
+    rng = np.random.default_rng(0)
+    system = random_system(1, 1, 3, rng)
+    u = rng.standard_normal((1000, 1))
+    w = np.hstack([u, simulate(system, u, rng.standard_normal(3)) + 0.1 * rng.standard_normal((1000, 1))])
+    sys0 = control.ss(control.tf([1.0], np.poly([0.99] * 3), 1))
+    assert np.all(np.abs(np.linalg.eigvals(sys0.A)) < 1)
+    with pytest.raises(ValueError) as raised:
+        ident(w, 1, 3, exct=[0], sys0=sys0)
+    message = str(raised.value)
+    assert isinstance(raised.value.__cause__, IllConditionedKernelError)
+    assert message.startswith("sys0 is too ill-conditioned a start for these data, though not found singular")
+    assert "not unique" not in message
+    assert re.search(r"accuracy check failed \(\|\|L\^-1 r\|\|\^2 = [0-9.e+]+ against .* = [0-9.e+]+, a relative "
+                     r"difference of [0-9.e+-]+, above 1e-05\)", message), message

@@ -270,10 +270,24 @@ def test_dask_executor_arguments_are_checked() -> None:
 
 
 def test_without_dask_the_error_says_what_to_install(monkeypatch) -> None:
+    """The hint works from a clone too (issue 31): `pip install 'ident[distributed]'` would fetch the
+    package index's `ident`, another project."""
     monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed now raises ImportError
-    with pytest.raises(ImportError, match=r"pip install 'ident\[distributed\]'"):
+    with pytest.raises(ImportError) as raised:
         with dask_executor(workers=1):
             pass
+    message = str(raised.value)
+    assert "pip install 'dask[distributed]>=2024.1'" in message
+    assert "in a clone of ident's repository, pip install -e '.[distributed]'" in message
+    assert "'ident[distributed]'" not in message
+
+
+def test_the_dask_hint_installs_what_the_extra_installs() -> None:
+    tomllib = pytest.importorskip("tomllib")  # Python 3.11 on
+    from ident import batch
+
+    project = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text(encoding="utf-8"))
+    assert project["project"]["optional-dependencies"]["distributed"] == [batch.DASK_REQUIREMENT]
 
 
 def test_an_unreachable_scheduler_is_a_connection_error_naming_it() -> None:
@@ -628,3 +642,30 @@ def test_a_running_scheduler_is_used_and_a_workers_address_named() -> None:
         with pytest.raises(ValueError, match=rf"scheduler '{worker}' answers as a Dask Worker, not as a scheduler"):
             with dask_executor(scheduler=worker, timeout=5):
                 pass
+
+
+# --- issue 31 point 7 (the small edges): a local cluster logs only Dask's errors, and puts its handlers back ---
+
+def test_a_local_cluster_logs_only_dasks_errors_while_it_lives() -> None:
+    """Dask's handler of its log (on the standard error; Dask adds it where the program configured no
+    logging, as the command line does, and not under pytest: here one like it) shows Dask's errors and
+    not its warnings while the cluster lives, and is put back after."""
+    pytest.importorskip("distributed")
+    import io
+    import logging
+
+    shown = io.StringIO()
+    handler = logging.StreamHandler(shown)
+    dask_log, nanny_log = logging.getLogger("distributed"), logging.getLogger("distributed.nanny")
+    dask_log.addHandler(handler)
+    try:
+        with dask_executor(workers=1) as executor:
+            assert executor.submit(sum, [1, 2]).result() == 3
+            nanny_log.warning("a warning of Dask's while the cluster lives")
+            nanny_log.error("an error of Dask's while the cluster lives")
+        nanny_log.warning("a warning of Dask's after the cluster")
+    finally:
+        dask_log.removeHandler(handler)
+    lines = shown.getvalue().splitlines()
+    assert lines == ["an error of Dask's while the cluster lives", "a warning of Dask's after the cluster"], lines
+    assert handler.level == logging.NOTSET

@@ -1,6 +1,7 @@
 """ident.cli: identify, daisy and lag through main(argv); usage errors are one line with exit status 2."""
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import subprocess
@@ -748,3 +749,54 @@ def test_the_help_says_how_columns_are_counted(capsys):
     status, out, _ = run(["identify", "--help"], capsys)
     out = " ".join(out.split())
     assert status == 0 and "counted from 0" in out and "columns of the file as for --inputs" in out
+
+
+# --- issue 31 point 7 (the small edges): an option must be spelled whole ----------------------------------
+
+@pytest.mark.parametrize("argv, abbreviation", [
+    (["identify", "DATA", "--lag", 1, "--n", 1], "--n"),            # was read as --no-center
+    (["identify", "DATA", "--lag", 1, "--exa", "inputs"], "--exa"),  # was read as --exact
+    (["identify", "DATA", "--lag", 1, "--hold", 0.5], "--hold"),    # was read as --holdout
+    (["lag", "DATA", "--inputs", "u1,u2", "--outputs", "y", "--max", 5], "--max"),
+    (["daisy", "erie", "--work", 2], "--work"),
+    (["--trace", "identify", "DATA", "--lag", 1], "--trace"),
+])
+def test_an_abbreviated_option_is_refused(argv, abbreviation, data_csv, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    argv = [data_csv if a == "DATA" else a for a in argv]
+    before = snapshot(data_csv.parent)
+    status, out, err = run(argv, capsys)
+    assert status == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    assert f"unrecognized arguments: {abbreviation}" in err
+    assert snapshot(data_csv.parent) == before  # nothing was run, nothing written
+
+
+def test_daisy_workers_without_dask_says_what_works_from_a_clone(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed now raises ImportError
+    status, _, err = run(["daisy", "erie", "--workers", 1, "--data-dir", SHARED, "--no-download", "--quiet",
+                          "--out", tmp_path / "out"], capsys)
+    assert status == 2 and len(err.strip().splitlines()) == 1, err
+    assert "--workers: running jobs on Dask needs dask.distributed" in err
+    assert "pip install 'dask[distributed]>=2024.1'" in err and "pip install -e '.[distributed]'" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_daisy_on_two_workers_prints_nothing_of_dask(tmp_path):
+    """Dask's own log lines (nanny warnings on start and shutdown) and its warning that port 8787 is
+    taken (held here on purpose, as another cluster would) are not printed (issue 31)."""
+    pytest.importorskip("distributed")
+    if not (SHARED / "erie.dat").is_file():
+        pytest.skip(f"the DAISY files are not in {SHARED}")
+    import socket
+
+    with contextlib.ExitStack() as stack:
+        dashboard_port = stack.enter_context(socket.socket())
+        with contextlib.suppress(OSError):  # taken already: by another cluster, as it should be
+            dashboard_port.bind(("", 8787))
+            dashboard_port.listen()
+        done = subprocess.run([sys.executable, "-m", "ident", "daisy", "erie", "--workers", "2", "--data-dir", SHARED,
+                               "--no-download", "--quiet", "--maxiter", "5", "--out", tmp_path / "out"],
+                              capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == "", done.stderr
+    assert (tmp_path / "out" / "table.md").is_file()

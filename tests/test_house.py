@@ -6,6 +6,8 @@
   slra`` one of the package.
 - A function (or method) has at most 80 lines, its docstring not counted (the docstrings are the
   paper's inline help, with a line per parameter); a module has at most 800 lines.
+- Every warning class of the package is exported from ``ident`` (issue 31), so that a user filters
+  it by class without knowing the module that raises it.
 """
 from __future__ import annotations
 
@@ -99,3 +101,27 @@ def test_functions_and_modules_stay_short(name: str) -> None:
     assert n_lines <= MAX_MODULE_LINES, f"{path.name} has {n_lines} lines"
     long = [(lines, where) for lines, where in function_lengths(path) if lines > MAX_FUNCTION_LINES]
     assert not long, f"{path.name}: functions over {MAX_FUNCTION_LINES} lines: {long}"
+
+
+# --- issue 31 point 7 (the small edges): the warning classes are exported ---------------------------------
+
+def warning_classes() -> dict[str, str]:
+    """Each class of the package whose base is a warning class, with the module that defines it."""
+    found = {}
+    for name, path in MODULES.items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ClassDef) and any(ast.unparse(base).endswith("Warning") for base in node.bases):
+                found[node.name] = name
+    return found
+
+
+def test_every_warning_class_is_exported() -> None:
+    import importlib
+
+    import ident
+
+    classes = warning_classes()
+    assert {"UnstableModelWarning", "IllConditionedWarning", "SLRAWarning", "MisfitWarning"} <= set(classes)
+    for name, module in classes.items():
+        assert name in ident.__all__, f"{name} (from {module}) is not in ident.__all__"
+        assert getattr(ident, name) is getattr(importlib.import_module(module), name), name
