@@ -1072,3 +1072,52 @@ def test_an_ill_conditioned_sys0_is_refused_naming_the_accuracy_check() -> None:
     assert "not unique" not in message
     assert re.search(r"accuracy check failed \(\|\|L\^-1 r\|\|\^2 = [0-9.e+]+ against .* = [0-9.e+]+, a relative "
                      r"difference of [0-9.e+-]+, above 1e-05\)", message), message
+
+
+# --- issue 31, the lag choice: the options choose_lag and misfit_vs_lag pass to ident are checked once, ---
+# --- before any identification; the lags the lag plot marks are lags ---------------------------------------
+def lag_frame():
+    import pandas
+    return pandas.DataFrame(W_LAGS, columns=["u", "y1", "y2"], index=pandas.timedelta_range(0, periods=120, freq="100ms"))
+
+
+def lag_curve():
+    from ident.validation import LagCurve
+    return LagCurve([1, 2], np.array([2.0, 1.0]), [1, 1], [0.0, 0.0], None, ["", ""])
+
+
+LAG_CHOICE_CASES = [
+    ('choose_lag refine negative', lambda: choose_lag(W_LAGS, 1, [1, 2], refine=-1e-9),
+     ValueError, 'refine must be a finite positive number, got -1e-09'),
+    ('choose_lag dt zero', lambda: choose_lag(W_LAGS, 1, [1, 2], dt=0),
+     ValueError, 'dt must be a finite positive number \\(the sample time\\), got 0'),
+    ('choose_lag dt text', lambda: choose_lag(W_LAGS, 1, [1, 2], dt="0.1"),
+     TypeError, "dt must be a positive number \\(the sample time\\), got '0.1'"),
+    ('choose_lag dt against the index', lambda: choose_lag(lag_frame(), 1, [1, 2], dt=1),
+     ValueError, 'dt = 1 contradicts the index of w, spaced 0.1 s'),
+    ('choose_lag wini for one lag only', lambda: choose_lag(W_LAGS, 1, [1, 2], wini=[np.zeros((1, 3))]),
+     ValueError, 'wini\\[0\\] must be ell x q = 2 x 3, got shape \\(1, 3\\)'),
+    ('choose_lag sys0', lambda: choose_lag(W_LAGS, 1, [1, 2], sys0=np.zeros((2, 6))),
+     TypeError, "unexpected keyword argument 'sys0'"),
+    ('choose_lag restart not a bool', lambda: choose_lag(W_LAGS, 1, [1, 2], restart="yes"),
+     TypeError, "restart must be True or False, got 'yes'"),
+    ('misfit_vs_lag refine text', lambda: misfit_vs_lag(W_LAGS, 1, [1, 2], refine="tight"),
+     ValueError, "refine must be a finite positive number, got 'tight'"),
+    ('misfit_vs_lag dt against the index', lambda: misfit_vs_lag(lag_frame(), 1, [1, 2], dt=0.2),
+     ValueError, 'dt = 0.2 contradicts the index of w'),
+    ('misfit_vs_lag restart 1', lambda: misfit_vs_lag(W_LAGS, 1, [1, 2], restart=1),
+     TypeError, 'restart must be True or False, got 1'),
+    ('plot_lag_curves chosen text', lambda: __import__("ident.validation").validation.plot_lag_curves(lag_curve(), chosen="2"),
+     TypeError, "chosen must be a lag \\(an integer\\) or a mapping of labels \\(str\\) to lags, got '2'"),
+    ('plot_lag_curves chosen float', lambda: __import__("ident.validation").validation.plot_lag_curves(lag_curve(), chosen=2.0),
+     TypeError, 'chosen must be a lag'),
+    ('plot_lag_curves chosen negative', lambda: __import__("ident.validation").validation.plot_lag_curves(lag_curve(), chosen={"mine": -1}),
+     ValueError, 'chosen: a lag is a non-negative integer, got -1'),
+    ('plot_lag_curves chosen label not text', lambda: __import__("ident.validation").validation.plot_lag_curves(lag_curve(), chosen={3: 2}),
+     TypeError, 'mapping of labels \\(str\\) to lags'),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", LAG_CHOICE_CASES, ids=[c[0] for c in LAG_CHOICE_CASES])
+def test_bad_options_of_the_lag_choice_are_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

@@ -221,3 +221,117 @@ def test_split_for_validation_is_the_papers_rule():
     assert len(raw.validation) == 0 and np.array_equal(raw.identification[:, 1], y[:, 0])
     with pytest.raises(ValueError, match="holdout must be a fraction in \\[0, 1\\), got 1"):
         split_for_validation(u, y, 1)
+
+
+# --- issue 31, the lag choice and time axes: choose_lag takes ident's options, monotone lag curves by
+# restarts, the chosen lag marked, plots against time ---------------------------------------------------
+from pathlib import Path  # noqa: E402
+
+from conftest import SHARED  # noqa: E402
+from ident import ident  # noqa: E402
+from ident.validation import compare, restart_local_minima, lag_point  # noqa: E402
+
+
+def test_choose_lag_passes_idents_options_unchanged():
+    w = lag2_data()
+    options = dict(exct=[0], wini=0, init="lra", maxiter=30, tol=1e-7, refine=1e-10)
+    choice = choose_lag(w, 1, [1, 2, 3], restart=False, **options)
+    for k, lag in enumerate(choice.lags):  # each lag's misfit is ident's with the same options, on the first 70 %
+        _, info, _, _ = ident(w[:choice.n_estimation], 1, lag, **options)
+        assert choice.misfits[k] == pytest.approx(info.M, rel=1e-9)
+    free = choose_lag(w, 1, [1, 2, 3], restart=False, exct=[0], init="lra", maxiter=30, tol=1e-7, refine=1e-10)
+    assert not np.allclose(free.misfits, choice.misfits, rtol=1e-6)  # wini=0 was not dropped
+
+
+def test_choose_lag_on_a_data_frame_with_names_and_a_time_index():
+    pandas = pytest.importorskip("pandas")
+    w = lag2_data()
+    frame = pandas.DataFrame(w, columns=["force", "position"],
+                             index=pandas.timedelta_range(0, periods=len(w), freq="50ms"))
+    by_name = choose_lag(frame, 1, [1, 2, 3], exct=["force"], dt=0.05)
+    by_array = choose_lag(w, 1, [1, 2, 3], exct=[0])
+    assert by_name.ell == by_array.ell == 2
+    np.testing.assert_allclose(by_name.misfits, by_array.misfits, rtol=1e-9)
+    with pytest.raises(ValueError, match="dt = 1 contradicts the index of w"):
+        choose_lag(frame, 1, [1, 2], dt=1)
+
+
+def test_the_legend_of_choose_lag_says_what_the_curve_is(tmp_path):
+    choice = choose_lag(lag2_data(), 1, [1, 2, 3], exct=[0])
+    figure = choice.plot(tmp_path / "choice.png")
+    labels = [text.get_text() for text in figure.axes[0].get_legend().get_texts()]
+    assert labels[0] == "identified on the first 70% (140 samples)" and "estimation part" not in labels
+    assert labels[-1] == "chosen lag (ell = 2)"
+    assert figure.axes[0].get_ylabel() == "misfit M on the first 70%"
+    assert figure.axes[1].get_ylabel() == "fit on the held-out last 30% (%)"
+
+
+def test_the_lag_plot_marks_several_lags_and_circles_restarts():
+    curve = LagCurve([1, 2, 3], np.array([10.0, 0.1, 0.09]), [3, 4, 5], [0.1] * 3, None, [""] * 3, "EIV",
+                     [True] * 3, [False, False, True])
+    figure = plot_lag_curves(curve, chosen={"lag of Table 1": 3, "chosen lag (OE, EIV)": 2})
+    labels = [text.get_text() for text in figure.axes[0].get_legend().get_texts()]
+    assert labels == ["EIV", "restarted from a smaller lag's model", "lag of Table 1 (ell = 3)",
+                      "chosen lag (OE, EIV) (ell = 2)"]
+    circled = figure.axes[0].get_lines()[1]
+    assert list(circled.get_xdata()) == [3] and list(circled.get_ydata()) == [0.09]
+
+
+def test_a_restart_from_a_smaller_lag_never_ends_above_it():
+    w = lag2_data()
+    options = dict(exct=None, wini=None, init="auto", maxiter=100, tol=1e-5, refine=None, dt=None)
+    points = [lag_point(w, 1, lag, None, options) for lag in (1, 3)]
+    points[1].misfit = 1e6 * points[0].misfit  # as if the solver had stopped in a poor local minimum
+    restarted = restart_local_minima(w, 1, [1, 3], points, None, options)
+    assert restarted == [False, True]
+    assert points[1].misfit <= points[0].misfit * (1 + 1e-9)  # z^2 R(z) starts at most at lag 1's misfit
+    assert points[1].message.startswith("lag 3: restarted from the lag-1 model") and "kept the restart" in points[1].message
+
+
+def dryer_identification():
+    from ident import daisy, daisy_runner
+    from ident.validation import split_for_validation
+    u, y = daisy.load("dryer", SHARED / "daisy", download_missing=False)
+    return split_for_validation(u, y, daisy_runner.HOLDOUT).identification
+
+
+@pytest.mark.skipif(not (SHARED / "daisy" / "dryer.dat").exists(), reason="the DAISY files are in ../shared/daisy")
+@pytest.mark.parametrize("exct", [None, [0]], ids=["eiv", "oe"])
+def test_the_lag_curve_of_dryer_is_non_increasing(exct):
+    w = dryer_identification()
+    first = misfit_vs_lag(w, 1, range(0, 9), exct=exct, restart=False)
+    curve = misfit_vs_lag(w, 1, range(0, 9), exct=exct)
+    rises = np.flatnonzero(np.diff(curve.misfit) > 1e-9 * curve.misfit[:-1]) + 1  # (OE's first pass: lag 7 above 6)
+    # The one exception left: a restart refused by ident's feasibility check of sys0 (under OPENBLAS_CORETYPE=
+    # Sandybridge, lag 8 from lag 7's model), which is issue 31's "sys0 feasible but refused" edge; see the report.
+    assert all("the restart gave nan (sys0 is infeasible" in curve.messages[k] for k in rises), curve.messages
+    assert np.all(curve.misfit <= first.misfit * (1 + 1e-9))  # a restart is kept only where it is better
+    for k, again in enumerate(curve.restarted):
+        assert again == ("restarted from the lag-" in curve.messages[k])
+        if again:
+            assert first.misfit[k] > np.min(curve.misfit[:k])  # restarted only above a smaller lag
+    assert len(curve.restarted) == 9 and first.restarted == [False] * 9
+
+
+def test_compare_plots_against_a_data_frames_time_index_and_the_sample_time():
+    pandas = pytest.importorskip("pandas")
+    rng = np.random.default_rng(3)
+    plant = random_system(1, 1, 2, rng)
+    u = rng.standard_normal((60, 1))
+    w = np.hstack([u, simulate(plant, u)])
+    seconds = make_ss(plant.A, plant.B, plant.C, plant.D, 0.5)
+    comparison = compare(w, seconds)
+    figure = comparison.plot()
+    assert figure.axes[-1].get_xlabel() == "time (s)"
+    np.testing.assert_allclose(figure.axes[0].get_lines()[0].get_xdata(), 0.5 * np.arange(60))
+    assert compare(w, plant).plot().axes[-1].get_xlabel() == "sample"  # dt 1: time unknown, in samples
+    two = compare([w, w[:20]], seconds)  # series one after another
+    np.testing.assert_allclose(two.time[1], 0.5 * np.arange(60, 80))
+    stamps = pandas.date_range("2024-01-01", periods=60, freq="500ms")
+    dated = compare(pandas.DataFrame(w, index=stamps), seconds)
+    assert dated.time_label == "time" and np.array_equal(dated.time[0], stamps.to_numpy())
+    lines = dated.plot().axes[0].get_lines()[0]
+    assert np.array_equal(np.asarray(lines.get_xdata(), dtype="datetime64[ns]"), stamps.to_numpy())
+    elapsed = compare(pandas.DataFrame(w, index=pandas.timedelta_range("10s", periods=60, freq="500ms")), seconds)
+    assert elapsed.time_label == "time (s)"
+    np.testing.assert_allclose(elapsed.time[0], 10 + 0.5 * np.arange(60))
