@@ -8,7 +8,7 @@ generated from the literate documents in ``literate/`` by ``python tangle.py``.
 """
 from ident.batch import Job, JobResult, dask_executor, run_jobs
 from ident.hankel import block_hankel, mosaic_hankel, time_major_permutation
-from ident.identification import IdentInfo, Reduction, ident, misfit
+from ident.identification import IdentInfo, Offset, Reduction, ident, misfit
 from ident.model_file import load_model
 from ident.reduction import balanced_truncation
 from ident.representations import kernel_to_ss, ss_to_kernel
@@ -18,7 +18,7 @@ from ident.structure import Structure
 from ident.validation import LagChoice, choose_lag, compare, fit_percent, misfit_vs_lag, resid, validate
 
 __all__ = [
-    "ident", "misfit", "IdentInfo", "Reduction", "compare", "resid", "validate", "fit_percent",
+    "ident", "misfit", "IdentInfo", "Offset", "Reduction", "compare", "resid", "validate", "fit_percent",
     "misfit_vs_lag", "choose_lag", "LagChoice", "load_model", "balanced_truncation", "kernel_misfit", "Structure",
     "SLRAWarning",
     "MisfitWarning",
