@@ -377,6 +377,64 @@ CASES += [
      ValueError, 'A contains non-finite entries'),
 ]
 
+# --- affine identification: ident's offset, the Offset record, offset= of misfit, compare, resid (issue 31) ---
+def integrator_with_offset(n_samples: int = 200) -> np.ndarray:
+    """Exact data of y(t+1) = y(t) + u(t) - 0.5 (an integrator), plus 3 on y: its P(1) is zero."""
+    u = np.random.default_rng(3).standard_normal(n_samples) + 0.5
+    y = np.zeros(n_samples)
+    for t in range(n_samples - 1):
+        y[t + 1] = y[t] + u[t] - 0.5
+    return np.column_stack([u, y + 3.0])
+
+
+def offset_of(m: int, p: int):
+    from ident import Offset
+    return Offset(np.ones(m), np.ones(p))
+
+
+def compare_offset(offset):
+    from ident import compare
+    return compare(W, SYS, offset=offset)
+
+
+def resid_offset(offset):
+    from ident import resid
+    return resid(W, SYS, offset=offset)
+
+
+CASES += [
+    ('ident offset number', lambda: ident(W, 1, 1, offset=1),
+     TypeError, 'offset must be True or False, got 1 \\(int\\)'),
+    ('ident offset text', lambda: ident(W, 1, 1, offset="fit"),
+     TypeError, "offset must be True or False, got 'fit'"),
+    ('ident offset record', lambda: ident(W, 1, 1, offset=offset_of(1, 2)),
+     TypeError, 'offset must be True or False.*to use a known offset, subtract it from w'),
+    ('ident offset wini 0', lambda: ident(W, 1, 1, offset=True, wini=0),
+     ValueError, 'wini=0 \\(data from rest\\) and offset=True: the rest of an affine model is its offset'),
+    ('ident offset constant input', lambda: ident(np.hstack([np.full((60, 1), 2.0), W[:, 1:]]), 1, 1, offset=True),
+     ValueError, 'variable 0 of w, an input .*is constant \\(with offset=True its constant is part of the offset\\)'),
+    ('ident offset too short', lambda: ident(W[:5], 1, 1, offset=True),
+     ValueError, 'w is too short.*\\(ell\\+1\\) q - p \\+ 1 \\(the offset\\) = 5'),
+    ('ident offset integrator', lambda: ident(integrator_with_offset(), 1, 1, offset=True, init="arx"),
+     ValueError, 'offset=True: the identified model has a pole at 1 \\(P\\(1\\) is singular'),
+    ('misfit offset True', lambda: misfit(W, SYS, offset=True),
+     TypeError, 'offset must be an ident.Offset or None, got bool \\(offset=True is ident.s option'),
+    ('misfit offset sizes', lambda: misfit(W, SYS, offset=offset_of(2, 1)),
+     ValueError, 'offset has 2 inputs and 1 outputs, but sysh has 1 inputs and 2 outputs'),
+    ('compare offset array', lambda: compare_offset(np.zeros(3)),
+     TypeError, 'offset must be an ident.Offset or None, got ndarray'),
+    ('compare offset sizes', lambda: compare_offset(offset_of(1, 1)),
+     ValueError, 'offset has 1 inputs and 1 outputs, but sys has 1 inputs and 2 outputs'),
+    ('resid offset True', lambda: resid_offset(True),
+     TypeError, 'offset must be an ident.Offset or None, got bool'),
+    ('Offset nan', lambda: offset_of(1, 1).__class__([np.nan], [1.0]),
+     ValueError, 'Offset.inputs must be a 1-D array of finite numbers, got NaN or inf'),
+    ('Offset 2-D', lambda: offset_of(1, 1).__class__([1.0], [[1.0]]),
+     ValueError, 'Offset.outputs must be a 1-D array of finite numbers, got shape \\(1, 1\\)'),
+    ('Offset text', lambda: offset_of(1, 1).__class__(["a"], [1.0]),
+     TypeError, 'Offset.inputs must hold real numbers'),
+]
+
 @pytest.mark.parametrize("name, call, error, words", CASES, ids=[c[0] for c in CASES])
 def test_bad_input_is_refused_clearly(name, call, error, words) -> None:
     with pytest.raises(error, match=words) as caught:

@@ -872,3 +872,45 @@ def test_the_command_line_chooses_the_lag_choose_lag_chooses(name, tmp_path, cap
             continue
         choice = choose_lag(w, info.m, [1, 2, 3], exct=exct, maxiter=20)
         assert line.split(": ")[1].split()[0] == str(choice.ell), (mode, line)
+
+
+# --- affine identification: identify's --offset {mean,fit,none} and its alias --no-center (issue 31) ---
+def offset_run(data_csv, tmp_path, capsys, *options):
+    model = tmp_path / "m.json"
+    status, out, err = run(["identify", data_csv, "--inputs", "u1,u2", "--outputs", "y", "--lag", 2,
+                            "--model", model, "--plot", tmp_path / "fit.png", *options], capsys)
+    return status, out, err, (json.loads(model.read_text()) if status == 0 else None)
+
+
+def test_identify_offset_fit_is_ident_with_offset_true(data_csv, tmp_path, capsys):
+    from ident import ident
+    status, out, err, saved = offset_run(data_csv, tmp_path, capsys, "--offset", "fit")
+    assert status == 0, err
+    w = np.loadtxt(data_csv, delimiter=",", skiprows=1)[:210]
+    sysh, info, _, _ = ident(w, 2, 2, offset=True)
+    assert saved["misfit"] == pytest.approx(info.M, rel=1e-8)
+    assert np.allclose(saved["means"]["inputs"], info.offset.inputs, rtol=1e-12, atol=0)
+    assert np.allclose(saved["means"]["outputs"], info.offset.outputs, rtol=1e-8, atol=0)
+    assert saved["fit"] > 95  # validated with the offset applied
+
+
+def test_identify_offset_mean_is_the_default_and_none_is_no_center(data_csv, tmp_path, capsys):
+    _, _, _, default = offset_run(data_csv, tmp_path, capsys)
+    _, _, _, mean = offset_run(data_csv, tmp_path, capsys, "--offset", "mean")
+    _, _, _, none = offset_run(data_csv, tmp_path, capsys, "--offset", "none")
+    _, _, _, alias = offset_run(data_csv, tmp_path, capsys, "--no-center")
+    assert default["misfit"] == pytest.approx(mean["misfit"], rel=1e-12)
+    assert default["means"]["outputs"][0] == pytest.approx(10, abs=1)
+    assert none["means"]["outputs"] == [0.0] and alias["means"] == none["means"]
+    assert alias["misfit"] == pytest.approx(none["misfit"], rel=1e-12)
+
+
+@pytest.mark.parametrize("options, words", [
+    (["--offset", "fit", "--no-center"], "--no-center is --offset none, which contradicts --offset fit"),
+    (["--offset", "fit", "--zero-initial"], "--zero-initial and --offset fit"),
+    (["--offset", "centre"], "--offset: invalid choice: 'centre'"),
+])
+def test_identify_offset_bad_input(options, words, data_csv, tmp_path, capsys):
+    status, out, err, _ = offset_run(data_csv, tmp_path, capsys, *options)
+    assert status == 2 and words in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) <= 2  # usage line and one message (argparse's choices: usage first)
