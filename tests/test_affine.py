@@ -164,3 +164,34 @@ def test_offset_record() -> None:
     assert offset.inputs.dtype == float and offset.vector.tolist() == [1.0, 2.0, 3.0]
     with pytest.raises(ValueError, match="read-only"):
         offset.inputs[0] = 5.0
+
+
+def test_the_lag_sweep_and_choice_take_the_offset_and_validate_with_each_lags_own() -> None:
+    from ident import choose_lag, misfit_vs_lag
+    plant, true_offset, (w,) = affine_data(1, 2, 2, [400], seed=31)
+    w = w + 0.02 * np.random.default_rng(32).standard_normal(w.shape)
+    affine = misfit_vs_lag(w[:300], 1, [1, 2], validation=w[300:], offset=True)
+    for k, lag in enumerate([1, 2]):  # each lag's fit is compare's with that lag's own offset
+        model, info, _, _ = ident(w[:300], 1, lag, offset=True)
+        assert affine.misfit[k] == pytest.approx(info.M, rel=1e-6)
+        assert affine.fit[k] == pytest.approx(np.mean(compare(w[300:], model, offset=info.offset).fit), abs=1e-6)
+    assert affine.fit[1] > 90
+    choice = choose_lag(w, 1, [1, 2, 3], offset=True)
+    assert choice.ell == 2 and np.all(np.isfinite(choice.holdout_fits))
+    with pytest.raises(TypeError, match="offset must be True or False"):
+        misfit_vs_lag(w, 1, [1], offset="yes")
+
+
+def test_the_command_lines_lag_takes_the_offset(tmp_path, capsys) -> None:
+    from ident import cli
+    plant, true_offset, (w,) = affine_data(1, 1, 1, [300], seed=5)
+    data = tmp_path / "data.csv"
+    np.savetxt(data, w + 0.01 * np.random.default_rng(6).standard_normal(w.shape), delimiter=",", header="u,y",
+               comments="")
+    common = ["lag", str(data), "--inputs", "u", "--outputs", "y", "--lags", "1,2", "--modes", "oe", "--plot",
+              str(tmp_path / "lag.png")]
+    assert cli.main([*common, "--offset", "fit"]) == 0
+    fit_output = capsys.readouterr().out
+    assert "chosen lag (OE" in fit_output
+    assert cli.main([*common, "--no-center", "--offset", "fit"]) == 2
+    assert "--no-center is --offset none" in capsys.readouterr().err
