@@ -83,7 +83,10 @@ GENERATOR = "ident weave.py"
 FIGURE_DPI = 110
 # Pygments wraps every token in a span; names and punctuation have no rule in the default style, and
 # whitespace shows no colour, so their spans only add bytes (a third of the pages' size): unwrapped.
-UNSTYLED_TOKEN = re.compile(r'<span class="(?:n|p|w)">([^<]*)</span>')
+# Operators (= . + ...) are the commonest token after names: the default style's dark grey for them
+# (#666) is barely told from the text, and their spans were another eighth of the pages: unwrapped too,
+# so they take the text's colour.
+UNSTYLED_TOKEN = re.compile(r'<span class="(?:n|p|w|o)">([^<]*)</span>')
 IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg", ".gif", ".svg", ".webp"}
 MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".gif": "image/gif",
         ".svg": "image/svg+xml", ".webp": "image/webp"}
