@@ -50,3 +50,21 @@ def recorded_warnings():
 @pytest.fixture
 def project_root() -> Path:
     return PROJECT_ROOT
+
+
+@contextlib.contextmanager
+def local_http_server(handler):
+    """An HTTP server on a free local port, serving with `handler` in a thread: yields the port."""
+    import http.server
+    import threading
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    server.timeout = 5
+    thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+    thread.start()
+    try:
+        yield server.server_address[1]
+    finally:
+        server.shutdown()
+        server.server_close()
+        thread.join(timeout=5)

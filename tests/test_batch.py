@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 import threadpoolctl
 
+from conftest import local_http_server
 from ident import Job, JobResult, SLRAWarning, dask_executor, ident, run_jobs
 from ident.batch import run_job
 from ident.representations import random_system, simulate
@@ -555,14 +556,8 @@ def not_a_scheduler(kind: str):
             def log_message(self, *args):
                 pass
 
-        server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Quiet)
-        thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-        thread.start()
-        try:
-            yield f"tcp://127.0.0.1:{server.server_address[1]}"
-        finally:
-            server.shutdown()
-            server.server_close()
+        with local_http_server(Quiet) as port:
+            yield f"tcp://127.0.0.1:{port}"
         return
     listener = socket.create_server(("127.0.0.1", 0))
     listener.settimeout(0.1)

@@ -324,7 +324,7 @@ def test_a_write_failing_midway_writes_nothing(data_csv, tmp_path, capsys, monke
             raise OSError(28, "No space left on device")
         real_replace(source, target)
 
-    monkeypatch.setattr(cli.os, "replace", failing_replace)
+    monkeypatch.setattr(os, "replace", failing_replace)
     status, _, err = run(["identify", data_csv, "--inputs", 0, "--outputs", 2, "--lag", 1, "--model", model,
                           "--plot", plot], capsys)
     assert status == 2 and "--model: cannot write" in err and "nothing was written" in err

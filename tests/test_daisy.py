@@ -16,7 +16,6 @@ import shutil
 import signal
 import socket
 import sys
-import threading
 import time
 import tracemalloc
 import zlib
@@ -25,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import local_http_server
 from ident import daisy, daisy_report, daisy_runner
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "daisy"
@@ -171,16 +171,8 @@ class _QuietHandler(http.server.SimpleHTTPRequestHandler):
 
 @contextlib.contextmanager
 def _serving(root: Path):
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(_QuietHandler, directory=str(root)))
-    server.timeout = 5
-    thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-    thread.start()
-    try:
-        yield f"http://127.0.0.1:{server.server_address[1]}/"
-    finally:
-        server.shutdown()
-        server.server_close()
-        thread.join(timeout=5)
+    with local_http_server(functools.partial(_QuietHandler, directory=str(root))) as port:
+        yield f"http://127.0.0.1:{port}/"
 
 
 def _publish(root: Path, name: str, content: bytes) -> None:
@@ -503,18 +495,11 @@ class _Trickling(http.server.BaseHTTPRequestHandler):
 
 def test_a_trickling_server_is_given_up_after_the_download_deadline(no_environment, monkeypatch, tmp_path):
     monkeypatch.setattr(daisy, "MAX_DOWNLOAD_SECONDS", 1.0)
-    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), _Trickling)
-    server.daemon_threads = True
-    thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-    thread.start()
-    try:
+    with local_http_server(_Trickling) as port:  # its handlers are daemon threads: a trickle is not waited for
         started = time.monotonic()
         with pytest.raises(daisy.DownloadError, match="did not finish downloading within 1 s"):
-            daisy.download("erie", tmp_path / "cache", url=f"http://127.0.0.1:{server.server_address[1]}/", timeout=5)
+            daisy.download("erie", tmp_path / "cache", url=f"http://127.0.0.1:{port}/", timeout=5)
         assert time.monotonic() - started < 15
-    finally:
-        server.shutdown()
-        server.server_close()
     assert _leftovers(tmp_path / "cache") == []
 
 

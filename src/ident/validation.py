@@ -13,7 +13,7 @@ import numpy as np
 
 from ident.caller import warn_at_caller
 from ident.affine import without_offset
-from ident.data_forms import as_array, as_series, checked_inputs_count, in_variable_order, real_array, with_roles
+from ident.data_forms import as_series, checked_inputs_count, in_variable_order, real_array, with_roles
 from ident.frames import check_model_sample_time, differences, has_default_names, is_data_frame, is_frame_sequence
 from ident.identification import (checked_sample_time, identification_rank, ident, misfit, run_tasks, scale_exponent,
                                   scaled)
