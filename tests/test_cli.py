@@ -63,59 +63,59 @@ def test_identify_from_npz_with_u_and_y_and_default_outputs(tmp_path, capsys, mo
 
 
 @pytest.mark.parametrize("argv, expected", [
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2"], "required: --lag"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "two"],
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3"], "required: --lag"),
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "two"],
      "argument --lag: must be a non-negative integer, got 'two'"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "-1"],
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "-1"],
      "argument --lag: must be a non-negative integer, got -1"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "9", "--lag", "1"], "--outputs: columns must be among 0..2"),
-    (["identify", "{csv}", "--inputs", "speed", "--outputs", "2", "--lag", "1"], "'speed' is neither"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "0", "--lag", "1"], "share columns"),
-    (["identify", "{csv}", "--outputs", "2", "--lag", "1"], "--inputs and --outputs are required"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--holdout", "1.5"], "--holdout"),
-    (["identify", "missing.csv", "--inputs", "0", "--outputs", "2", "--lag", "1"], "does not exist"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--bogus"], "unrecognized arguments"),
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "10", "--lag", "1"], "--outputs: columns are counted from 1 to 3"),
+    (["identify", "{csv}", "--inputs", "speed", "--outputs", "3", "--lag", "1"], "'speed' is neither"),
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "1", "--lag", "1"], "share columns"),
+    (["identify", "{csv}", "--outputs", "3", "--lag", "1"], "--inputs and --outputs are required"),
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "1", "--holdout", "1.5"], "--holdout"),
+    (["identify", "missing.csv", "--inputs", "1", "--outputs", "3", "--lag", "1"], "does not exist"),
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "1", "--bogus"], "unrecognized arguments"),
     (["frobnicate"], "invalid choice"),
     (["daisy", "nowhere"], "unknown data set(s) nowhere"),
     (["daisy", "--modes", "ml"], "invalid choice"),
     (["lag", "nowhere"], "neither a data file nor a DAISY data set"),
-    (["lag", "{csv}", "--lags", "a-b", "--inputs", "0", "--outputs", "2"], "--lags must look like"),
+    (["lag", "{csv}", "--lags", "a-b", "--inputs", "1", "--outputs", "3"], "--lags must look like"),
     # every option is validated and named (issue 16)
-    (["identify", "{csv}", "--inputs", "0,0", "--outputs", "2", "--lag", "1"],
-     "--inputs: column(s) 'u1' given more than once in '0,0'"),
-    (["identify", "{csv}", "--inputs", "u1,0", "--outputs", "2", "--lag", "1"], "--inputs: column(s) 'u1' given more"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "none", "--lag", "1"],
+    (["identify", "{csv}", "--inputs", "1,1", "--outputs", "3", "--lag", "1"],
+     "--inputs: column(s) 'u1' given more than once in '1,1'"),
+    (["identify", "{csv}", "--inputs", "u1,1", "--outputs", "3", "--lag", "1"], "--inputs: column(s) 'u1' given more"),
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "none", "--lag", "1"],
      "--outputs: 'none' is not possible here (a model needs at least one output)"),
-    (["identify", "{csv}", "--inputs", "2:1", "--outputs", "2", "--lag", "1"], "--inputs: the range '2:1' selects no column"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--maxiter", "-1"],
+    (["identify", "{csv}", "--inputs", "3-1", "--outputs", "3", "--lag", "1"], "--inputs: the range '3-1' selects no column"),
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "1", "--maxiter", "-1"],
      "argument --maxiter: must be a non-negative integer, got -1"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--tol", "0"],
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "1", "--tol", "0"],
      "argument --tol: must be a finite positive number, got 0"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--tol", "nan"],
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "1", "--tol", "nan"],
      "argument --tol: must be a finite positive number, got nan"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--holdout", "-0.5"],
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "1", "--holdout", "-0.5"],
      "argument --holdout: must be a fraction in [0, 1), got -0.5"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--plot", "{tmp}/missing/fit.png"],
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "1", "--plot", "{tmp}/missing/fit.png"],
      "--plot: the folder {tmp}/missing does not exist"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--plot", "{tmp}/fit.xyz"],
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "1", "--plot", "{tmp}/fit.xyz"],
      "--plot: {tmp}/fit.xyz must end in one of"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--model", "{tmp}/missing/m.json"],
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "1", "--model", "{tmp}/missing/m.json"],
      "--model: the folder {tmp}/missing does not exist"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--model", "{tmp}"],
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "1", "--model", "{tmp}"],
      "--model: {tmp} is a folder; give a file name"),
-    (["identify", "{csv}", "--inputs", "0", "--outputs", "2", "--lag", "1", "--exact", "0,2"],
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "1", "--exact", "1,3"],
      "--exact: at most m = 1 columns can be exact"),
-    (["identify", "{tmp}", "--inputs", "0", "--outputs", "2", "--lag", "1"], "is a folder, not a file"),
+    (["identify", "{tmp}", "--inputs", "1", "--outputs", "3", "--lag", "1"], "is a folder, not a file"),
     (["daisy", "erie", "--maxiter", "-1"], "argument --maxiter: must be a non-negative integer, got -1"),
     (["daisy", "erie", "--tol=-1e-5"], "argument --tol: must be a finite positive number, got -1e-5"),
     (["daisy", "erie", "--out", "{csv}"], "--out: {csv} is a file, not a folder"),
-    (["lag", "{csv}", "--inputs", "0", "--outputs", "2", "--holdout", "1.5"],
+    (["lag", "{csv}", "--inputs", "1", "--outputs", "3", "--holdout", "1.5"],
      "argument --holdout: must be a fraction in [0, 1), got 1.5"),
-    (["lag", "{csv}", "--inputs", "0", "--outputs", "2", "--holdout", "-0.5"], "argument --holdout: must be a fraction"),
-    (["lag", "{csv}", "--inputs", "0", "--outputs", "2", "--maxiter", "-3"], "argument --maxiter: must be a non-negative"),
-    (["lag", "{csv}", "--inputs", "0", "--outputs", "2", "--lags", "5-1"], "--lags must give non-negative lags"),
-    (["lag", "{tmp}", "--inputs", "0", "--outputs", "2"], "is a folder, not a data file"),
-    (["lag", "{csv}", "--inputs", "0", "--outputs", "2", "--plot", "{tmp}/missing/lag.png"],
+    (["lag", "{csv}", "--inputs", "1", "--outputs", "3", "--holdout", "-0.5"], "argument --holdout: must be a fraction"),
+    (["lag", "{csv}", "--inputs", "1", "--outputs", "3", "--maxiter", "-3"], "argument --maxiter: must be a non-negative"),
+    (["lag", "{csv}", "--inputs", "1", "--outputs", "3", "--lags", "5-1"], "--lags must give non-negative lags"),
+    (["lag", "{tmp}", "--inputs", "1", "--outputs", "3"], "is a folder, not a data file"),
+    (["lag", "{csv}", "--inputs", "1", "--outputs", "3", "--plot", "{tmp}/missing/lag.png"],
      "--plot: the folder {tmp}/missing does not exist"),
 ])
 def test_bad_arguments_exit_2_with_one_line(argv, expected, data_csv, capsys):
@@ -138,7 +138,7 @@ def test_a_file_that_is_not_a_table(tmp_path, capsys):
 
 
 def test_an_impossible_identification_exits_1_with_one_line(data_csv, capsys):
-    status, _, err = run(["identify", data_csv, "--inputs", "0", "--outputs", "2", "--lag", "500"], capsys)
+    status, _, err = run(["identify", data_csv, "--inputs", "1", "--outputs", "3", "--lag", "500"], capsys)
     assert status == 1 and "lag ell = 500" in err and len(err.strip().splitlines()) == 1
 
 
@@ -165,14 +165,14 @@ def test_help_names_the_program_as_started(monkeypatch, capsys, argv0, prog):
 
 def test_lag_on_a_csv_file(data_csv, tmp_path, capsys):
     plot = tmp_path / "lag.png"
-    status, out, err = run(["lag", data_csv, "--inputs", "0:2", "--outputs", "y", "--lags", "1-3", "--modes", "oe",
+    status, out, err = run(["lag", data_csv, "--inputs", "1-2", "--outputs", "y", "--lags", "1-3", "--modes", "oe",
                             "--plot", plot], capsys)
     assert status == 0, err
     lines = out.splitlines()
     assert lines[1] == "lag | OE misfit | OE fit %" and len(lines) >= 5 and plot.stat().st_size > 1000
     chosen = [line for line in lines if line.startswith("chosen lag (OE, hold-out rule on the identification data): ")]
     assert len(chosen) == 1 and "by lag: 1: " in chosen[0], out
-    status, out, err = run(["lag", data_csv, "--inputs", "0:2", "--outputs", "y", "--lags", "0", "--modes", "oe",
+    status, out, err = run(["lag", data_csv, "--inputs", "1-2", "--outputs", "y", "--lags", "0", "--modes", "oe",
                             "--plot", plot], capsys)
     assert status == 0 and "no lag chosen (OE): the hold-out rule chooses among positive lags" in out, err
 
@@ -258,7 +258,7 @@ def test_u_and_y_of_different_lengths(tmp_path, capsys):
 def test_npy_content_under_an_npz_name(tmp_path, capsys):
     np.save(tmp_path / "table.npy", np.ones((50, 2)))
     (tmp_path / "table.npy").rename(tmp_path / "table.npz")
-    refused(["identify", tmp_path / "table.npz", "--inputs", 0, "--outputs", 1, "--lag", 1], capsys,
+    refused(["identify", tmp_path / "table.npz", "--inputs", 1, "--outputs", 2, "--lag", 1], capsys,
             "holds a single .npy array, not an .npz archive; name it table.npy", tmp_path)
 
 
@@ -268,7 +268,7 @@ def test_an_npy_file_is_read(tmp_path, capsys, monkeypatch):
     u = rng.standard_normal(200)
     np.save(tmp_path / "table.npy", np.column_stack([u, simulate(system, u)[:, 0]]))
     monkeypatch.chdir(tmp_path)
-    status, out, err = run(["identify", "table.npy", "--inputs", 0, "--outputs", 1, "--lag", 1], capsys)
+    status, out, err = run(["identify", "table.npy", "--inputs", 1, "--outputs", 2, "--lag", 1], capsys)
     assert status == 0 and "identified from 140 samples" in out, err
 
 
@@ -309,7 +309,7 @@ def test_demo_seed_must_be_non_negative(capsys):
 def test_a_failed_identification_keeps_the_previous_results(data_csv, tmp_path, capsys):
     model, plot = tmp_path / "m.json", tmp_path / "fit.png"
     model.write_text("previous model"), plot.write_bytes(b"previous plot")
-    status, _, err = run(["identify", data_csv, "--inputs", 0, "--outputs", 2, "--lag", 500, "--model", model,
+    status, _, err = run(["identify", data_csv, "--inputs", 1, "--outputs", 3, "--lag", 500, "--model", model,
                           "--plot", plot], capsys)
     assert status == 1 and model.read_text() == "previous model" and plot.read_bytes() == b"previous plot"
 
@@ -325,7 +325,7 @@ def test_a_write_failing_midway_writes_nothing(data_csv, tmp_path, capsys, monke
         real_replace(source, target)
 
     monkeypatch.setattr(os, "replace", failing_replace)
-    status, _, err = run(["identify", data_csv, "--inputs", 0, "--outputs", 2, "--lag", 1, "--model", model,
+    status, _, err = run(["identify", data_csv, "--inputs", 1, "--outputs", 3, "--lag", 1, "--model", model,
                           "--plot", plot], capsys)
     assert status == 2 and "--model: cannot write" in err and "nothing was written" in err
     assert model.read_text() == "previous model"
@@ -333,7 +333,7 @@ def test_a_write_failing_midway_writes_nothing(data_csv, tmp_path, capsys, monke
 
 
 def test_lag_with_maxiter_0_says_nothing_converged(data_csv, tmp_path, capsys):
-    status, out, err = run(["lag", data_csv, "--inputs", "0:2", "--outputs", "y", "--lags", "1,2", "--modes", "eiv",
+    status, out, err = run(["lag", data_csv, "--inputs", "1-2", "--outputs", "y", "--lags", "1,2", "--modes", "eiv",
                             "--maxiter", 0, "--plot", tmp_path / "lag.png"], capsys)
     assert status == 0, err
     assert "no lag converged within --maxiter 0 iterations" in out
@@ -484,11 +484,11 @@ def test_identify_refuses_one_file_for_model_and_plot(link, data_csv, tmp_path, 
 
 def test_lag_never_writes_its_plot_over_its_data(data_csv, tmp_path, capsys):
     data = data_csv.rename(tmp_path / "plant.png")
-    refused_before_writing(["lag", data, "--inputs", "0:2", "--outputs", "y", "--plot", data], capsys, tmp_path,
+    refused_before_writing(["lag", data, "--inputs", "1-2", "--outputs", "y", "--plot", data], capsys, tmp_path,
                            f"--plot: {data} is the data file {data}")
     link = tmp_path / "lag.png"
     link.symlink_to(data)
-    refused_before_writing(["lag", data, "--inputs", "0:2", "--outputs", "y", "--plot", link], capsys, tmp_path,
+    refused_before_writing(["lag", data, "--inputs", "1-2", "--outputs", "y", "--plot", link], capsys, tmp_path,
                            f"--plot: {link} is the data file {data}")
 
 
@@ -513,7 +513,7 @@ def test_an_output_that_is_a_fifo_or_a_folder_is_not_replaced(command, data_csv,
     if command == "identify":
         argv = ["identify", data_csv, *IDENTIFY, "--model", fifo, "--plot", tmp_path / "fit.png"]
     elif command == "lag":
-        argv = ["lag", data_csv, "--inputs", "0:2", "--outputs", "y", "--plot", fifo]
+        argv = ["lag", data_csv, "--inputs", "1-2", "--outputs", "y", "--plot", fifo]
     else:
         argv = ["daisy", "erie", "--quiet", "--out", tmp_path]
         fifo = tmp_path / "table.md"
@@ -690,7 +690,7 @@ def test_a_data_file_that_is_a_fifo_is_refused_without_blocking(command, tmp_pat
     monkeypatch.chdir(tmp_path)  # default outputs land in tmp_path, which is compared
     fifo = tmp_path / "data.csv"
     os.mkfifo(fifo)
-    argv = [command, fifo, "--inputs", 0, "--outputs", 1] + (["--lag", 1] if command == "identify" else [])
+    argv = [command, fifo, "--inputs", 1, "--outputs", 2] + (["--lag", 1] if command == "identify" else [])
     refused_before_writing(argv, capsys, tmp_path, f"{fifo} is not a regular file (a FIFO, device or socket)")
 
 
@@ -725,21 +725,21 @@ def test_an_interrupted_daisy_run_saves_its_finished_sets_beside_the_results(tmp
 # --- issue 31, roles by name: --exact counts the file's columns, as --inputs and --outputs do --------
 
 def test_exact_columns_are_the_files_columns_and_are_printed_by_name(data_csv, tmp_path, capsys):
-    """--inputs 1 --outputs 2 --exact 1: file column 1 (u2), the only input, not w's second variable
-    (the output); the printout names it as the file does."""
+    """--inputs 2 --outputs 3 --exact 2: the file's column 2 (u2, counted from 1), the only input, not
+    w's second variable (the output); the printout names it as the file does."""
     model = tmp_path / "m.json"
-    status, out, err = run(["identify", data_csv, "--inputs", "1", "--outputs", "2", "--lag", "2", "--exact", "1",
+    status, out, err = run(["identify", data_csv, "--inputs", "2", "--outputs", "3", "--lag", "2", "--exact", "2",
                             "--model", model, "--plot", tmp_path / "fit.png"], capsys)
     assert status == 0, err
     assert "exact: u2" in out
     assert json.loads(model.read_text())["exact"] == [0]  # the model file: positions in [inputs outputs]
-    status, out, err = run(["identify", data_csv, "--inputs", "1", "--outputs", "2", "--lag", "2", "--exact", "u2",
+    status, out, err = run(["identify", data_csv, "--inputs", "2", "--outputs", "3", "--lag", "2", "--exact", "u2",
                             "--model", model, "--plot", tmp_path / "fit.png"], capsys)
     assert status == 0 and "exact: u2" in out, err
 
 
 def test_exact_columns_not_chosen_are_refused_in_one_line(data_csv, tmp_path, capsys):
-    status, out, err = run(["identify", data_csv, "--inputs", "1", "--outputs", "2", "--lag", "2", "--exact", "0",
+    status, out, err = run(["identify", data_csv, "--inputs", "2", "--outputs", "3", "--lag", "2", "--exact", "1",
                             "--model", tmp_path / "m.json", "--plot", tmp_path / "fit.png"], capsys)
     assert status == 2 and len(err.strip().splitlines()) == 1, err
     assert "--exact: column(s) 'u1' are neither --inputs nor --outputs" in err
@@ -748,7 +748,31 @@ def test_exact_columns_not_chosen_are_refused_in_one_line(data_csv, tmp_path, ca
 def test_the_help_says_how_columns_are_counted(capsys):
     status, out, _ = run(["identify", "--help"], capsys)
     out = " ".join(out.split())
-    assert status == 0 and "counted from 0" in out and "columns of the file as for --inputs" in out
+    assert status == 0 and "counted from 1" in out and "columns of the file as for --inputs" in out
+
+
+@pytest.mark.parametrize("spec, message", [
+    ("0", "--inputs: columns are counted from 1 to 3 (the file's columns); got '0'"),
+    ("1:3", "--inputs: '1:3' looks like a Python slice; columns are counted from 1 and a range is written a-b"),
+    ("2-9", "--inputs: columns are counted from 1 to 3 (the file's columns); got '2-9'"),
+    ("-1", "--inputs: '-1' is neither a column number, a range a-b nor a column name"),
+])
+def test_column_numbers_count_from_one_and_slices_are_refused(data_csv, capsys, spec, message):
+    """Columns are counted from 1 as the file's (cut, awk, DAISY's descriptions); the old 0-based
+    slice syntax is refused with the new spelling rather than read with another meaning."""
+    status, _, err = run(["identify", data_csv, "--inputs", spec, "--outputs", "y", "--lag", "1"], capsys)
+    assert status == 2 and message in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_range_of_column_numbers_includes_both_ends(data_csv, tmp_path, capsys):
+    """--inputs 1-2 is the file's first two columns (u1, u2), the same model as naming them."""
+    fits = []
+    for spec in ("1-2", "u1,u2"):
+        status, out, err = run(["identify", data_csv, "--inputs", spec, "--outputs", "3", "--lag", "1",
+                                "--model", tmp_path / "m.json", "--plot", tmp_path / "fit.png"], capsys)
+        assert status == 0, err
+        fits.append(json.loads((tmp_path / "m.json").read_text()))
+    assert fits[0]["inputs"] == fits[1]["inputs"] == ["u1", "u2"]
 
 
 # --- issue 31 point 7 (the small edges): an option must be spelled whole ----------------------------------
@@ -813,7 +837,7 @@ def test_lag_plot_marks_the_lag_chosen_in_each_mode(data_csv, tmp_path, capsys, 
         return drawn["figure"]
 
     monkeypatch.setattr(cli, "plot_lag_curves", recording)
-    status, out, err = run(["lag", data_csv, "--inputs", "0:2", "--outputs", "y", "--lags", "1-3",
+    status, out, err = run(["lag", data_csv, "--inputs", "1-2", "--outputs", "y", "--lags", "1-3",
                             "--plot", tmp_path / "lag.png"], capsys)
     assert status == 0, err
     chosen = {mode: int(line.split(": ")[1].split()[0]) for mode in ("OE", "EIV") for line in out.splitlines()

@@ -389,7 +389,7 @@ def identify_file(tmp_path, *options, header=True, capsys=None):
     data = tmp_path / "data.csv"
     np.savetxt(data, w, delimiter=",", header="force,position" if header else "", comments="")
     model_file = tmp_path / "model.json"
-    inputs, outputs = ("force", "position") if header else ("0", "1")
+    inputs, outputs = ("force", "position") if header else ("1", "2")
     status = main(["identify", str(data), "--inputs", inputs, "--outputs", outputs, "--lag", "2",
                    "--model", str(model_file), "--plot", str(tmp_path / "fit.png"), *options])
     return status, model_file, w
@@ -411,7 +411,7 @@ def test_a_model_file_round_trip(tmp_path) -> None:
 def test_columns_of_a_file_without_a_header_are_named_column_k(tmp_path) -> None:
     status, model_file, _ = identify_file(tmp_path, header=False)
     saved = load_model(model_file)
-    assert status == 0 and saved.model.input_labels == ["column 0"] and saved.model.output_labels == ["column 1"]
+    assert status == 0 and saved.model.input_labels == ["column 1"] and saved.model.output_labels == ["column 2"]
     assert saved.model.dt == 1
 
 

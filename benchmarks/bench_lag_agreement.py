@@ -1,0 +1,82 @@
+"""The command line's `lag SET` and the API's choose_lag choose the same lag on every DAISY set. Not a test.
+
+Issue 31's acceptance: with the defaults of `python -m ident lag` (lags 1-8, both modes, holdout 0.3,
+offset "mean", maxiter 100) and the documented equivalent call of the API (choose_lag on the
+identification part the command line centres and splits, with the same lags and exact variables),
+the chosen lag of every set and mode is printed side by side and written to
+benchmarks/bench_lag_agreement.json. tests/test_cli.py runs the same comparison on lags 1-3 with 20
+iterations (marked slow); this is the whole range at the defaults (minutes per set).
+
+Usage: python benchmarks/bench_lag_agreement.py [SET ...]
+"""
+import contextlib
+import io
+import json
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+from ident import cli, daisy, daisy_runner
+from ident.validation import choose_lag, split_for_validation
+
+ROOT = Path(__file__).resolve().parents[1]
+DAISY = ROOT.parent / "shared" / "daisy"
+LAGS = list(range(1, 9))  # the command line's default --lags 1-8
+TABLE1_SETS = [dataset.name for dataset in daisy.table1()]
+
+
+def command_line_choices(name: str) -> dict[str, str]:
+    """mode -> the chosen lag `python -m ident lag NAME` prints (or its "no lag chosen" reason)."""
+    printed = io.StringIO()
+    with tempfile.TemporaryDirectory() as folder, contextlib.redirect_stdout(printed):
+        status = cli.main(["lag", name, "--data-dir", str(DAISY), "--no-download", "--plot", f"{folder}/lag.png"])
+    if status != 0:
+        raise RuntimeError(f"lag {name} exited with status {status}")
+    choices = {}
+    for mode in ("OE", "EIV"):
+        line = next(line for line in printed.getvalue().splitlines()
+                    if line.startswith((f"chosen lag ({mode}, ", f"no lag chosen ({mode})")))
+        choices[mode] = line.split(": ")[1].split()[0] if line.startswith("chosen") else "none"
+    return choices
+
+
+def api_choices(name: str) -> dict[str, str]:
+    """mode -> choose_lag's lag on the identification part, with the command line's exact variables."""
+    info = daisy.dataset(name)
+    u, y = daisy.load(name, DAISY, download_missing=False)
+    w = split_for_validation(u, y, daisy_runner.HOLDOUT).identification
+    choices = {}
+    for mode, exct in (("OE", list(range(info.m))), ("EIV", None)):
+        try:
+            choices[mode] = str(choose_lag(w, info.m, LAGS, exct=exct).ell)
+        except ValueError:
+            choices[mode] = "none"
+    return choices
+
+
+def main(names: list[str]) -> int:
+    warnings.simplefilter("ignore")
+    rows, agree = [], 0
+    for name in names:
+        started = time.perf_counter()
+        from_cli, from_api = command_line_choices(name), api_choices(name)
+        seconds = time.perf_counter() - started
+        for mode in ("OE", "EIV"):
+            same = from_cli[mode] == from_api[mode]
+            agree += same
+            rows.append({"set": name, "mode": mode, "command_line": from_cli[mode], "api": from_api[mode],
+                         "same": same})
+            print(f"{name:18s} {mode:3s} lag: command line {from_cli[mode]:>4s}, choose_lag {from_api[mode]:>4s}"
+                  f"{'' if same else '   DIFFERENT'}  ({seconds:.0f} s for both modes and both ways)", flush=True)
+    print(f"the same lag in {agree} of {len(rows)} (set, mode) pairs")
+    if len(names) == len(TABLE1_SETS):
+        out = ROOT / "benchmarks" / "bench_lag_agreement.json"
+        out.write_text(json.dumps({"lags": LAGS, "rows": rows, "same": agree, "pairs": len(rows)}, indent=1) + "\n")
+        print(f"wrote {out}")
+    return 0 if agree == len(rows) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:] or list(TABLE1_SETS)))
