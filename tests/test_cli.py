@@ -938,3 +938,15 @@ def test_identify_offset_bad_input(options, words, data_csv, tmp_path, capsys):
     status, out, err, _ = offset_run(data_csv, tmp_path, capsys, *options)
     assert status == 2 and words in err and "Traceback" not in err
     assert len(err.strip().splitlines()) <= 2  # usage line and one message (argparse's choices: usage first)
+
+
+# --- issue 31: lag chooses among the lags choose_lag can judge, and names the others -----------------------
+
+def test_lag_chooses_among_the_lags_it_can_judge_and_names_the_rest(data_csv, tmp_path, capsys):
+    """Lag 40 is on the curve (210 identification samples) but too long for choose_lag's estimation
+    part (147 samples): the choice is among the others and its line names 40, as destill's 5-8."""
+    status, out, err = run(["lag", data_csv, "--inputs", "1-2", "--outputs", "y", "--lags", "1,2,40", "--modes", "oe",
+                            "--maxiter", 5, "--plot", tmp_path / "lag.png"], capsys)
+    assert status == 0, err
+    line = next(line for line in out.splitlines() if line.startswith("chosen lag (OE"))
+    assert line.endswith("; lag 40 too long to judge on these data)") and " 40:" not in line, line

@@ -517,8 +517,8 @@ def lag_choice(w_identification, m: int, lags: list[int], mode: str, maxiter: in
     if not positive:
         return f"no lag chosen ({mode.upper()}): the hold-out rule chooses among positive lags", None
     candidates = [lag for lag in positive if lag_refusal(w_identification, m, lag, CHOOSE_LAG_HOLDOUT) is None]
-    left_out = "" if candidates == positive else \
-        f"; lags {', '.join(str(lag) for lag in positive if lag not in candidates)} too long to judge on these data"
+    dropped = [str(lag) for lag in positive if lag not in candidates]
+    left_out = f"; lag{'s' * (len(dropped) > 1)} {', '.join(dropped)} too long to judge on these data" if dropped else ""
     try:
         choice = choose_lag(w_identification, m, candidates or positive, exct=list(range(m)) if mode == "oe" else None,
                             maxiter=maxiter, offset=offset, holdout=CHOOSE_LAG_HOLDOUT)
