@@ -393,7 +393,7 @@ def k_step_outputs(sys, data: np.ndarray, horizon, simulated: np.ndarray, past: 
     k = checked_integer("horizon", horizon, 1)
     A, B, C, D = (np.asarray(getattr(sys, name), dtype=float) for name in "ABCD")
     ell = max(observability_index(sys), 1) if sys.nstates else 1
-    past = 2 * ell if past is None else checked_integer("past", past, ell, why=f"the lag of sys is {ell}")
+    past = 2 * ell if past is None else checked_integer("past", past, ell, why=" (the lag of sys)")
     predicted = np.array(simulated, dtype=float)
     T, m = len(data), sys.ninputs
     first = k + past - 1  # the first sample with a full past window
