@@ -10,7 +10,8 @@ choose_lag on it (lags 1 .. LARGEST_LAG, fewer where the data are too short), th
 the error level of its misfit (InputPrior.from_data). In the test part 20 % of all values are missing
 at random (numpy default_rng(seed) masks, seeds 0 .. masks-1); the error is
 e = ||w_miss - w_hat_miss|| / ||w_miss|| in %, the median over the masks, for the completion with the
-prior and without it (the maximum-likelihood completion, misfit()'s trajectory).
+prior and without it (the maximum-likelihood completion, misfit()'s trajectory), and the same error of
+each variable over its own missing values (inputs first; the median over the masks).
 
 Writes benchmarks/results/completion_protocol.json. About a minute.
 """
@@ -59,15 +60,20 @@ def one_set(name: str, data_dir, n_masks: int) -> dict:
     model, info, _, _ = ident(centred, m, ell)
     prior = InputPrior.from_data(centred, m, info.M)
     errors = {"with_prior": [], "maximum_likelihood": []}
+    per_variable = {"with_prior": [], "maximum_likelihood": []}
     for seed in range(n_masks):
         gaps = np.random.default_rng(seed).random(test.shape) < MISSING
         gappy = np.where(gaps, np.nan, test - mean)
         for key, options in (("with_prior", {"input_prior": prior}), ("maximum_likelihood", {})):
             filled = complete(gappy, model, **options).w + mean
             errors[key].append(100 * np.linalg.norm(filled[gaps] - test[gaps]) / np.linalg.norm(test[gaps]))
+            per_variable[key].append([100 * np.linalg.norm((filled - test)[gaps[:, j], j]) / np.linalg.norm(test[gaps[:, j], j])
+                                      for j in range(w.shape[1])])
     return {"ell": ell, "n": model.nstates, "m": m, "q": w.shape[1], "T": len(w), "n_identification": n_identification,
             "error_with_prior": float(np.median(errors["with_prior"])),
             "error_maximum_likelihood": float(np.median(errors["maximum_likelihood"])),
+            "per_variable_with_prior": np.median(per_variable["with_prior"], axis=0).tolist(),
+            "per_variable_maximum_likelihood": np.median(per_variable["maximum_likelihood"], axis=0).tolist(),
             "published_method_9": PUBLISHED_METHOD_9[name], "published_best": PUBLISHED_BEST[name]}
 
 

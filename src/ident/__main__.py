@@ -11,6 +11,7 @@ import numpy as np
 
 from ident import __version__
 from ident.cli import build_parser, main as cli_main, non_negative_integer
+from ident.cli_completion import add_completion_commands
 from ident.hankel import block_hankel
 
 
@@ -58,6 +59,7 @@ def main(argv: list[str] | None = None) -> int:
     demo_parser.add_argument("--seed", type=non_negative_integer, default=1,
                              help="seed of the random system and input (a non-negative integer)")
     demo_parser.set_defaults(handler=lambda args: print(demo(seed=args.seed)) or 0)
+    add_completion_commands(parser.commands)  # complete and forecast (23-completion-and-forecasting.md)
     return cli_main(argv, parser=parser)
 
 
