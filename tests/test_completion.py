@@ -164,6 +164,10 @@ def test_a_horizon_beyond_the_record_is_the_simulation():
         assert np.all(np.abs(compare(noisy, SYSTEM, horizon=horizon).fit - simulation.fit) < 1e-10)
     short = compare(noisy, SYSTEM, horizon=1)
     assert not np.allclose(short.fit, simulation.fit, rtol=0, atol=1e-3)  # a short horizon is another number
+    assert short.horizon == 1 and simulation.horizon is None
+    labels = [line.get_label() for line in short.plot().axes[0].get_lines()]
+    assert labels == ["measured", "1-step predicted"]
+    assert np.allclose(short.series_fits[0], short.fit, rtol=0, atol=1e-9)  # one series: its fit is the fit
 
 
 def test_a_k_step_prediction_is_the_completion_of_its_window():
