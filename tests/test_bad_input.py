@@ -1226,6 +1226,8 @@ def _completion_cases():
          ValueError, 'w_ref is not persistently exciting enough, or not an exact trajectory'),
         ('complete reference of the wrong width', lambda: complete(w, w_ref=np.zeros((50, 3))),
          ValueError, 'w_ref has q = 3 variables but w has 2'),
+        ('complete reference not an array', lambda: complete(w, w_ref=w.tolist()),
+         TypeError, 'w_ref must be a T x q numpy array \\(inputs first\\) for the data-driven completion, got list'),
         ('complete exct with a reference', lambda: complete(w, w_ref=w, exct=[0]),
          ValueError, 'exct is not taken with w_ref'),
         ('compare horizon zero', lambda: compare(w, system, horizon=0),
