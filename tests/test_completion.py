@@ -93,7 +93,11 @@ def test_forecast_equals_the_completion_with_the_future_outputs_missing():
 def test_data_driven_forecast_agrees_with_the_model_on_exact_data():
     reference = trajectory(SYSTEM, 400, 7)
     structure = reference_structure(reference)
-    assert (structure.m, structure.n) == (2, 4)
+    assert (structure.m, structure.ell, structure.n) == (2, 4, 4)  # one output: the lag is the order
+    chain = control.ss(np.diag(np.ones(3), -1), np.eye(4)[:, :1], np.eye(4)[[3, 1]], np.zeros((2, 1)), 1)
+    assert (reference_structure(trajectory(chain, 200, 8)).ell, reference_structure(trajectory(chain, 200, 8)).n) == (2, 4)
+    with pytest.raises(ValueError, match="fewer than the lag 4 of the reference trajectory"):
+        forecast(None, W_EXACT[:3], W_EXACT[3:10, :2], w_ref=reference)
     by_data = forecast(None, W_EXACT[:20], W_EXACT[20:40, :2], w_ref=reference)
     by_model = forecast(SYSTEM, W_EXACT[:20], W_EXACT[20:40, :2])
     assert relative_error(by_data.y, by_model.y) < 1e-8
