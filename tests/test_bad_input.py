@@ -1179,3 +1179,76 @@ LAG_CHOICE_CASES = [
 @pytest.mark.parametrize("name, call, error, words", LAG_CHOICE_CASES, ids=[c[0] for c in LAG_CHOICE_CASES])
 def test_bad_options_of_the_lag_choice_are_refused_clearly(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# ---- completion and forecasting (23-completion-and-forecasting.md) ----
+def _completion_system():
+    return control.ss([[0.5, 0.2], [0.0, 0.3]], [[1.0], [0.5]], [[1.0, 0.0]], [[0.0]], 1)
+
+
+def _completion_data(n_samples: int = 30) -> np.ndarray:
+    u = np.random.default_rng(33).standard_normal((n_samples, 1))
+    from ident.representations import simulate
+    return np.hstack([u, simulate(_completion_system(), u, np.zeros(2))])
+
+
+def _completion_cases():
+    from ident import InputPrior, compare, complete, forecast
+    system, w = _completion_system(), _completion_data()
+    return [
+        ('forecast future input of the wrong width', lambda: forecast(system, w, np.zeros((5, 2))),
+         ValueError, 'u_future must be an H x m array with m = 1 input column\\(s\\) and H >= 1 samples, got shape \\(5, 2\\)'),
+        ('forecast empty future input', lambda: forecast(system, w, np.zeros((0, 1))),
+         ValueError, 'u_future must be an H x m array'),
+        ('forecast future input not finite', lambda: forecast(system, w, np.full((3, 1), np.nan)),
+         ValueError, 'u_future holds non-finite values \\(the first at sample 0, input 0\\)'),
+        ('forecast past shorter than the lag', lambda: forecast(system, w[:1], np.zeros((5, 1))),
+         ValueError, 'w_past has 1 samples, fewer than the lag 2 of the model'),
+        ('forecast without a model', lambda: forecast("model", w, np.zeros((5, 1))),
+         TypeError, 'sys must be a discrete-time control.StateSpace, got str'),
+        ('complete no observed sample', lambda: complete(np.full((10, 2), np.nan), system),
+         ValueError, 'w has no observed value \\(all 20 entries are NaN\\)'),
+        ('complete neither model nor reference', lambda: complete(w),
+         TypeError, 'complete needs a model sys'),
+        ('complete model and reference', lambda: complete(w, system, w_ref=w),
+         ValueError, 'give a model sys or a reference trajectory w_ref, not both'),
+        ('complete weights of the wrong length', lambda: complete(w, system, weights=[1.0]),
+         ValueError, 'weights must be 2 positive finite numbers'),
+        ('complete negative weight', lambda: complete(w, system, weights=[1.0, -1.0]),
+         ValueError, 'weights must be 2 positive finite numbers'),
+        ('complete prior not an InputPrior', lambda: complete(w, system, input_prior=(0.0, 1.0)),
+         TypeError, 'input_prior must be an ident.InputPrior, got tuple'),
+        ('complete prior with zero spread', lambda: complete(w, system, input_prior=InputPrior(np.zeros(1), np.zeros(1), 1.0)),
+         ValueError, 'input_prior must have 1 finite means, 1 positive finite standard deviations'),
+        ('complete reference not persistently exciting', lambda: complete(w[:20], w_ref=w[:25]),
+         ValueError, 'w_ref is not persistently exciting enough'),
+        ('complete noisy reference', lambda: complete(w[:5], w_ref=np.random.default_rng(1).standard_normal((200, 2))),
+         ValueError, 'w_ref is not persistently exciting enough, or not an exact trajectory'),
+        ('complete reference of the wrong width', lambda: complete(w, w_ref=np.zeros((50, 3))),
+         ValueError, 'w_ref has q = 3 variables but w has 2'),
+        ('complete reference not an array', lambda: complete(w, w_ref=w.tolist()),
+         TypeError, 'w_ref must be a T x q numpy array \\(inputs first\\) for the data-driven completion, got list'),
+        ('complete exct with a reference', lambda: complete(w, w_ref=w, exct=[0]),
+         ValueError, 'exct is not taken with w_ref'),
+        ('compare horizon zero', lambda: compare(w, system, horizon=0),
+         ValueError, 'horizon must satisfy 1 <= horizon, got 0'),
+        ('compare horizon not an integer', lambda: compare(w, system, horizon=2.5),
+         TypeError, 'horizon must be an integer, got 2.5'),
+        ('compare past shorter than the lag', lambda: compare(w, system, horizon=3, past=1),
+         ValueError, 'past must satisfy 2 <= past \\(the lag of sys\\), got 1'),
+    ]
+
+
+COMPLETION_CASES = _completion_cases()
+
+
+@pytest.mark.parametrize("name, call, error, words", COMPLETION_CASES, ids=[c[0] for c in COMPLETION_CASES])
+def test_bad_input_of_completion_and_forecasting_is_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+def test_forecast_warns_naming_the_spectral_radius_of_an_unstable_model() -> None:
+    from ident import UnstableModelWarning, forecast
+    unstable = control.ss([[1.2]], [[1.0]], [[1.0]], [[0.0]], 1)
+    with pytest.warns(UnstableModelWarning, match="spectral radius 1.2"):
+        forecast(unstable, np.ones((3, 2)), np.zeros((30, 1)))

@@ -4,6 +4,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -950,3 +951,68 @@ def test_lag_chooses_among_the_lags_it_can_judge_and_names_the_rest(data_csv, tm
     assert status == 0, err
     line = next(line for line in out.splitlines() if line.startswith("chosen lag (OE"))
     assert line.endswith("; lag 40 too long to judge on these data)") and " 40:" not in line, line
+
+# ---- complete and forecast (23-completion-and-forecasting.md) ----
+@pytest.fixture
+def completion_files(data_csv, tmp_path, capsys):
+    """A model identified from data_csv, a copy of its first 100 samples with gaps, a past and a future."""
+    from ident.__main__ import main as full_main
+    model = tmp_path / "m.json"
+    assert full_main(["identify", str(data_csv), "--inputs", "u1,u2", "--outputs", "y", "--lag", "2",
+                      "--model", str(model), "--plot", str(tmp_path / "fit.png")]) == 0
+    w = np.loadtxt(data_csv, delimiter=",", skiprows=1)
+    gappy = w[:100].copy()
+    gaps = np.random.default_rng(6).random(gappy.shape) < 0.2
+    gappy[gaps] = np.nan
+    paths = {"model": model, "gappy": tmp_path / "gappy.csv", "past": tmp_path / "past.csv",
+             "future": tmp_path / "future.csv"}
+    np.savetxt(paths["gappy"], gappy, delimiter=",", header="u1,u2,y", comments="")
+    np.savetxt(paths["past"], w[200:250], delimiter=",", header="u1,u2,y", comments="")
+    np.savetxt(paths["future"], w[250:, [1, 0]], delimiter=",", header="u2,u1", comments="")  # by name, any order
+    capsys.readouterr()
+    return paths, w, gaps
+
+
+def run_full(argv, capsys) -> tuple[int, str, str]:
+    from ident.__main__ import main as full_main
+    status = full_main([str(a) for a in argv])
+    captured = capsys.readouterr()
+    return status, captured.out, captured.err
+
+
+def test_complete_and_forecast_on_the_command_line(completion_files, tmp_path, capsys):
+    paths, w, gaps = completion_files
+    out, plot = tmp_path / "filled.csv", tmp_path / "filled.png"
+    status, printed, err = run_full(["complete", paths["gappy"], "--model", paths["model"], "--out", out, "--plot", plot],
+                                    capsys)
+    assert status == 0, err
+    assert f"{gaps.sum()} missing value(s) filled" in printed and plot.stat().st_size > 0
+    filled = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert np.array_equal(filled[~gaps], w[:100][~gaps])  # the observed values as they were
+    assert np.abs(filled[:, 2] - w[:100, 2])[gaps[:, 2]].max() < 0.2 * np.abs(w[:, 2] - w[:, 2].mean()).max()
+    out = tmp_path / "ahead.csv"
+    status, printed, err = run_full(["forecast", paths["past"], "--model", paths["model"], "--future", paths["future"],
+                                     "--out", out], capsys)
+    assert status == 0, err
+    ahead = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert ahead.shape == (50, 3) and np.array_equal(ahead[:, :2], w[250:, :2])
+    assert np.linalg.norm(ahead[:, 2] - w[250:, 2]) < 0.1 * np.linalg.norm(w[250:, 2] - w[250:, 2].mean())
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["forecast", "{past}", "--model", "{model}"], "the following arguments are required: --future"),
+    (["forecast", "{past}", "--model", "{model}", "--future", "{gappy}"], "--future: .* holds missing or infinite values"),
+    (["complete", "{future}", "--model", "{model}"], "data: .* has columns u2, u1; expected the model's signals u1, u2, y"),
+    (["complete", "{gappy}", "--model", "{gappy}"], "--model: cannot read the model file"),
+    (["complete", "{gappy}", "--model", "{model}", "--out", "{gappy}"], "--out"),
+    (["complete", "{gappy}", "--model", "{model}", "--plot", "{dir}/p.unknown"], "--plot"),
+    (["forecast", "{short}", "--model", "{model}", "--future", "{future}"], "past: .* has 1 samples, fewer than the lag 2"),
+])
+def test_bad_options_of_complete_and_forecast_are_one_line(completion_files, tmp_path, capsys, argv, words):
+    paths, w, _ = completion_files
+    short = tmp_path / "short.csv"
+    np.savetxt(short, w[:1], delimiter=",", header="u1,u2,y", comments="")
+    names = {key: str(value) for key, value in paths.items()} | {"short": str(short), "dir": str(tmp_path)}
+    status, _, err = run_full([item.format(**names) for item in argv], capsys)
+    assert status == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert re.search(words, err), err

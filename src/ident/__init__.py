@@ -7,6 +7,7 @@ After I. Markovsky, "System identification by structured low-rank approximation"
 generated from the literate documents in ``literate/`` by ``python tangle.py``.
 """
 from ident.batch import Job, JobResult, dask_executor, run_jobs
+from ident.completion import Completion, Forecast, InputPrior, complete, forecast
 from ident.continuous import to_continuous
 from ident.hankel import block_hankel, mosaic_hankel, time_major_permutation
 from ident.identification import IdentInfo, Offset, Reduction, UnstableModelWarning, ident, misfit
@@ -27,5 +28,6 @@ __all__ = [
     "UnstableModelWarning", "IllConditionedWarning",
     "InfeasibleKernelError", "kernel_to_ss", "ss_to_kernel", "block_hankel", "mosaic_hankel",
     "time_major_permutation", "Job", "JobResult", "run_jobs", "dask_executor",
+    "complete", "forecast", "Completion", "Forecast", "InputPrior",
 ]
 __version__ = "0.1.0"
