@@ -90,7 +90,7 @@ UNSTYLED_TOKEN = re.compile(r'<span class="(?:n|p|w|o)">([^<]*)</span>')
 IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg", ".gif", ".svg", ".webp"}
 MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".gif": "image/gif",
         ".svg": "image/svg+xml", ".webp": "image/webp"}
-TEXT_COLUMNS = 88  # characters of code that fit in the text column (45rem at the CSS below)
+TEXT_COLUMNS = 88  # characters of code that fit in the text column (45rem in site.css)
 TEXT_WIDTH_PX = 720  # the text column in CSS pixels; a wider figure widens its example
 FRONT_SECTIONS = {"quick-start"}  # sections that belong to the front matter the index shows
 CAPTION = re.compile(r"^\s*#\s*caption:\s*(?P<caption>\S.*?)\s*$")  # in an example: its figure's caption
@@ -1311,98 +1311,7 @@ class Page:
 # The whole weave
 
 
-STYLE = """\
-:root { color-scheme: light; --text: #1f2328; --muted: #59636e; --rule: #d1d9e0; --code-bg: #f6f8fa;
-  --link: #0550ae; --chunk: #6639ba; }
-html { font-size: 100%; -webkit-text-size-adjust: 100%; }
-body { margin: 0; color: var(--text); background: #fff; line-height: 1.6;
-  font-family: Charter, "Bitstream Charter", "Source Serif Pro", Georgia, "DejaVu Serif", serif; }
-.site, main, footer { max-width: 45rem; margin: 0 auto; padding: 0 1.25rem; }
-/* long code lines and large figures run wider than the text when the window allows, centred on
-   the text column */
-.wide { --wide: min(64rem, 100vw - 2.5rem); width: var(--wide);
-  margin-left: calc((100% - var(--wide)) / 2); box-sizing: border-box; }
-.site-bar { border-bottom: 1px solid var(--rule); background: #f6f8fa; }
-.site { display: flex; flex-wrap: wrap; gap: .3em 1.2em; padding-top: .5em; padding-bottom: .5em;
-  font: .9em/1.4 system-ui, -apple-system, "Segoe UI", "DejaVu Sans", sans-serif; }
-.site .home { font-weight: 600; margin-right: auto; }
-.site a[rel] span { display: inline-block; max-width: 16em; overflow: hidden; text-overflow: ellipsis;
-  white-space: nowrap; vertical-align: bottom; }
-h1, h2, h3, h4 { font-family: system-ui, -apple-system, "Segoe UI", "DejaVu Sans", sans-serif; line-height: 1.25;
-  margin: 1.6em 0 .6em; }
-h1 { font-size: 1.8em; margin-top: 1em; } h2 { font-size: 1.4em; border-bottom: 1px solid var(--rule);
-  padding-bottom: .2em; } h3 { font-size: 1.15em; } h4 { font-size: 1em; }
-a { color: var(--link); text-decoration: none; } a:hover { text-decoration: underline; }
-:target { scroll-margin-top: 1em; }
-p, li { overflow-wrap: break-word; }
-code, pre, kbd { font-family: "DejaVu Sans Mono", Menlo, Consolas, "Liberation Mono", monospace; }
-code { font-size: .85em; background: var(--code-bg); padding: .1em .25em; border-radius: 3px; }
-pre { font-size: .8em; line-height: 1.45; background: var(--code-bg); border: 1px solid #e1e6eb;
-  border-radius: 4px; padding: .6em .8em; overflow-x: auto; margin-top: 0; margin-bottom: 1em; tab-size: 4; }
-pre code { font-size: 1em; background: none; padding: 0; }
-table { border-collapse: collapse; display: block; overflow-x: auto; margin: 1em 0; font-size: .95em; }
-th, td { border: 1px solid var(--rule); padding: .3em .6em; vertical-align: top; text-align: left; }
-th { background: #f6f8fa; }
-img { max-width: 100%; height: auto; }
-math { font-family: "STIX Two Math", "Latin Modern Math", "Cambria Math", "TeX Gyre Pagella Math",
-  "DejaVu Math TeX Gyre", math; font-size: 1.05em; }
-.math-display { max-width: 100%; box-sizing: border-box; overflow-x: auto; overflow-y: hidden; margin: .9em 0;
-  padding: .1em 0; }
-/* a formula or table wider than the column scrolls within itself; a shadow at an edge shows that
-   there is more (the covers move with the content, the shadows stay with the box) */
-.math-display, table { background: linear-gradient(to right, #fff 30%, rgba(255, 255, 255, 0)),
-  linear-gradient(to left, #fff 30%, rgba(255, 255, 255, 0)) 100% 0,
-  radial-gradient(farthest-side at 0 50%, rgba(0, 0, 0, .18), rgba(0, 0, 0, 0)),
-  radial-gradient(farthest-side at 100% 50%, rgba(0, 0, 0, .18), rgba(0, 0, 0, 0)) 100% 0;
-  background-repeat: no-repeat; background-size: 2.5em 100%, 2.5em 100%, .8em 100%, .8em 100%;
-  background-attachment: local, local, scroll, scroll; }
-.math-error { color: #b42318; }
-/* a numbered formula: centred on the column as long as it fits beside its number at the right, and
-   scrolling within its own box when it does not */
-.equation { display: grid; grid-template-columns: 1fr minmax(0, max-content) 1fr; align-items: center;
-  column-gap: .5em; margin: .9em 0; }
-.equation > .math-display { grid-column: 2; margin: 0; }
-.equation-number { grid-column: 3; justify-self: end; }
-caption { display: block; text-align: left; font-size: .85em; color: var(--muted); padding: 0 0 .3em; }
-.table-number { font-weight: 600; color: var(--text); }
-.part-name { font: .85em/1.4 system-ui, -apple-system, "Segoe UI", "DejaVu Sans", sans-serif; color: var(--muted);
-  margin-top: 1.5em; }
-.part-name + h1 { margin-top: .2em; }
-nav.toc h3.part { font-size: .95em; margin: .8em 0 .2em; }
-ul.bibliography, ol.bibliography { list-style: none; padding-left: 0; }
-.bibliography li { padding-left: 2.2em; text-indent: -2.2em; }
-nav.toc { border: 1px solid var(--rule); border-radius: 4px; padding: .5em 1em; margin: 1em 0 1.5em;
-  font-size: .92em; background: #fbfcfd; }
-nav.toc h2 { font-size: 1em; border: 0; margin: .3em 0; padding: 0; }
-nav.toc ul { margin: .2em 0; padding-left: 1.2em; } nav.toc li { margin: .1em 0; }
-.chunk, .example { margin-top: 1.2em; margin-bottom: 1.4em; }
-.chunk pre, .example pre { margin-bottom: .3em; }
-.chunk-head, .example-head { font-family: system-ui, -apple-system, "Segoe UI", "DejaVu Sans", sans-serif;
-  font-size: .9em; margin-bottom: .2em; }
-.chunk-head .chunk-num { color: var(--muted); margin-right: .2em; }
-.chunk-name { color: var(--chunk); font-style: italic; }
-.chunk-name code, .chunk-ref code, .chunk-notes code { font-style: normal; background: none; padding: 0; }
-.chunk-op { margin-left: .15em; }
-.chunk-ref { font-family: Charter, Georgia, "DejaVu Serif", serif; font-style: italic; color: var(--chunk); }
-.chunk-ref a { color: var(--chunk); }
-.chunk-num { font-size: .8em; font-style: normal; }
-.chunk-notes { font-size: .82em; color: var(--muted); margin: 0 0 .5em; }
-.chunk-page { font-size: .9em; }
-.example-head a { font-weight: 600; }
-pre.output { background: #fff; border-left: 3px solid #8c959f; border-radius: 0; max-height: 32em; }
-pre.stderr { border-left-color: #bf8700; color: #6e4b00; }
-figure { margin: .8em 0 1.2em; } figcaption { font-size: .85em; color: var(--muted); }
-.figure-number { font-weight: 600; color: var(--text); }
-ul.chunk-index { list-style: none; padding-left: 0; font-size: .95em; }
-ul.chunk-index li { margin: .15em 0; padding-left: 1.5em; text-indent: -1.5em; }
-.api-table .kind { font-size: .85em; }
-.api-table td:last-child { min-width: 12em; }
-span.computed { border-bottom: 1px dotted var(--muted); }
-.muted, footer { color: var(--muted); }
-footer { font-size: .85em; margin-top: 3em; }
-footer p { border-top: 1px solid var(--rule); padding: .6em 0 2em; margin: 0; }
-@media print { .site-bar, nav.toc { display: none; } pre { white-space: pre-wrap; } }
-"""
+STYLE_FILE = Path(__file__).resolve().parent / "literate_tools" / "site.css"  # the page style, read when weaving
 
 
 # after the Pygments rules, which they adjust: docstrings read as text, not as loud strings
@@ -1714,7 +1623,8 @@ class Weave:
         pygments_css = HtmlFormatter(style="default").get_style_defs(".highlight")
         replaced = (".highlight {", ".highlight  {", "pre {", "td.linenos", "span.linenos")  # the page's own
         pygments_css = "\n".join(line for line in pygments_css.splitlines() if not line.startswith(replaced))
-        return (f"/* Generated by {GENERATOR}. */\n{STYLE}\n/* Pygments (style 'default') */\n{pygments_css}\n"
+        style = STYLE_FILE.read_text(encoding="utf-8")
+        return (f"/* Generated by {GENERATOR}. */\n{style}\n/* Pygments (style 'default') */\n{pygments_css}\n"
                 f"{PYGMENTS_OVERRIDES}")
 
     # HTML pages
