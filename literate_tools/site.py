@@ -71,8 +71,8 @@ from pathlib import Path
 
 from literate_tools import chunks, tangle
 from literate_tools.examples import DocumentRun, ExampleRunner, Result, example_environment
-from literate_tools.render import (BLOCK_PLACEHOLDER, PART_MARKER, Apparatus, Page, PageRenderer, WeaveError, chunk_title,
-                                   part_marker)
+from literate_tools.render import (BLOCK_PLACEHOLDER, PART_MARKER, Apparatus, Page, PageRenderer, WeaveError,
+                                   chunk_title, part_marker)
 from literate_tools.xref import Piece, cross_references, reachable
 
 
