@@ -1,5 +1,7 @@
 """Run the examples and inline values of the literate documents, in reading order, one namespace per
-document, as the weave runs them (``weave.DocumentRun``).
+document, as the weave runs them (``literate_tools.examples.DocumentRun``).
+
+This imports the parser and the example runner only, not the weave's renderer or site.
 
 Each example and each inline value is its own test item named after the document and the example
 (or the line of the value). A failure names its ``file:line`` in the literate source. One failure is
@@ -14,38 +16,37 @@ import os
 import matplotlib
 import pytest
 
-import tangle
 from conftest import PROJECT_ROOT
+from literate_tools import chunks, examples
 
 matplotlib.use("Agg")
-weave = pytest.importorskip("weave")
 
-WEB = tangle.read_web(PROJECT_ROOT)
+WEB = chunks.read_web(PROJECT_ROOT)
 UNITS = [(document, index, unit) for document in WEB.documents
-         for index, unit in enumerate(weave.run_order(document))]
-RUNS: dict[str, "weave.DocumentRun"] = {}
+         for index, unit in enumerate(examples.run_order(document))]
+RUNS: dict[str, "examples.DocumentRun"] = {}
 
 
-def unit_id(document: tangle.Document, unit) -> str:
-    name = unit.name if isinstance(unit, tangle.Block) else f"value at line {unit.location.line}"
+def unit_id(document: chunks.Document, unit) -> str:
+    name = unit.name if isinstance(unit, chunks.Block) else f"value at line {unit.location.line}"
     return f"{os.path.basename(document.path)}::{name}"
 
 
 @pytest.fixture(scope="module", autouse=True)
 def environment():
     """The examples run as the weave runs them: in the project root, with the package importable."""
-    with weave.example_environment(PROJECT_ROOT, figures=None):
+    with examples.example_environment(PROJECT_ROOT, figures=None):
         yield
     for run in RUNS.values():
         run.runner.close_all()
 
 
 @pytest.mark.parametrize("document, index, unit", UNITS, ids=[unit_id(d, u) for d, _, u in UNITS])
-def test_example(document: tangle.Document, index: int, unit) -> None:
+def test_example(document: chunks.Document, index: int, unit) -> None:
     if document.path not in RUNS:
-        RUNS[document.path] = weave.DocumentRun(document, weave.ExampleRunner(PROJECT_ROOT, None))
+        RUNS[document.path] = examples.DocumentRun(document, examples.ExampleRunner(PROJECT_ROOT, None))
     outcome = RUNS[document.path].run_until(index)
-    title = f"{weave.unit_title(unit)} at {unit.location}"
+    title = f"{examples.unit_title(unit)} at {unit.location}"
     if outcome.status == "skipped":
         pytest.skip(f"{title} skipped: {outcome.message}")
     if outcome.status == "failed":
@@ -53,4 +54,4 @@ def test_example(document: tangle.Document, index: int, unit) -> None:
 
 
 def test_there_are_examples() -> None:
-    assert sum(isinstance(unit, tangle.Block) for _, _, unit in UNITS) >= 3
+    assert sum(isinstance(unit, chunks.Block) for _, _, unit in UNITS) >= 3

@@ -8,29 +8,40 @@
   paper's inline help, with a line per parameter); a module has at most 800 lines.
 - Every warning class of the package is exported from ``ident`` (issue 31), so that a user filters
   it by class without knowing the module that raises it.
+- The literate tooling, ``literate_tools/`` (what ``tangle.py`` and ``weave.py`` run), keeps the same
+  rules of length and of imports (issue 28); its parser and tangler import the standard library only
+  (the tangler runs before anything is installed), the example runner that ``tests/test_examples.py``
+  imports reaches neither the renderer nor the site, and the two programs at the root only start it.
 """
 from __future__ import annotations
 
 import ast
+import sys
 from pathlib import Path
 
 import pytest
 
-PACKAGE = Path(__file__).resolve().parents[1] / "src" / "ident"
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "src" / "ident"
+TOOLS = ROOT / "literate_tools"  # the literate tooling (issue 28): the same rules
+PACKAGES = {"ident": PACKAGE, "literate_tools": TOOLS}
 MAX_FUNCTION_LINES = 80
 MAX_MODULE_LINES = 800
 
 
 def module_name(path: Path) -> str:
-    parts = ["ident", *path.relative_to(PACKAGE).with_suffix("").parts]
+    top = next(name for name, folder in PACKAGES.items() if path.is_relative_to(folder))
+    parts = [top, *path.relative_to(PACKAGES[top]).with_suffix("").parts]
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-MODULES = {module_name(path): path for path in sorted(PACKAGE.rglob("*.py"))}
+MODULES = {module_name(path): path for folder in PACKAGES.values() for path in sorted(folder.rglob("*.py"))}
+IDENT_MODULES = {name: path for name, path in MODULES.items() if name.split(".")[0] == "ident"}
 
 
-def imports_of(name: str) -> set[str]:
-    """The modules of ident that module `name` imports, anywhere in its code."""
+def imported_names(name: str) -> set[str]:
+    """Every module that module `name` imports, anywhere in its code (a name ``from`` a module counts
+    as the submodule of that name if there is one, else as the module)."""
     path = MODULES[name]
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found = set()
@@ -44,7 +55,12 @@ def imports_of(name: str) -> set[str]:
             for alias in node.names:
                 submodule = f"{base}.{alias.name}"
                 found.add(submodule if submodule in MODULES else base)
-    return {module for module in found if module in MODULES and module != name}
+    return found
+
+
+def imports_of(name: str) -> set[str]:
+    """The modules of ident (or of literate_tools) that module `name` imports, anywhere in its code."""
+    return {module for module in imported_names(name) if module in MODULES and module != name}
 
 
 GRAPH = {name: imports_of(name) for name in MODULES}
@@ -108,7 +124,7 @@ def test_functions_and_modules_stay_short(name: str) -> None:
 def warning_classes() -> dict[str, str]:
     """Each class of the package whose base is a warning class, with the module that defines it."""
     found = {}
-    for name, path in MODULES.items():
+    for name, path in IDENT_MODULES.items():
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.ClassDef) and any(ast.unparse(base).endswith("Warning") for base in node.bases):
                 found[node.name] = name
@@ -125,3 +141,50 @@ def test_every_warning_class_is_exported() -> None:
     for name, module in classes.items():
         assert name in ident.__all__, f"{name} (from {module}) is not in ident.__all__"
         assert getattr(ident, name) is getattr(importlib.import_module(module), name), name
+
+
+# --- issue 28 point 6: the literate tooling is a package of the house -------------------------------------
+
+def reached_from(name: str) -> set[str]:
+    """The modules of the project that module `name` imports, directly or through others."""
+    reached, stack = set(), [name]
+    while stack:
+        for imported in GRAPH[stack.pop()]:
+            if imported not in reached:
+                reached.add(imported)
+                stack.append(imported)
+    return reached
+
+
+def test_the_tooling_is_checked_as_the_package_is() -> None:
+    tools = {name for name in MODULES if name.split(".")[0] == "literate_tools"}
+    assert {"literate_tools.chunks", "literate_tools.tangle", "literate_tools.examples", "literate_tools.render",
+            "literate_tools.site"} <= tools, tools
+    assert (TOOLS / "site.css").is_file()  # the page style, read when weaving
+
+
+@pytest.mark.parametrize("name", ["literate_tools.chunks", "literate_tools.tangle"])
+def test_the_tangler_needs_only_the_standard_library(name: str) -> None:
+    outside = {module for module in imported_names(name)
+               if module.split(".")[0] not in sys.stdlib_module_names and module.split(".")[0] != "literate_tools"}
+    assert not outside, f"{name} imports {sorted(outside)}: tangle.py must run before anything is installed"
+    assert reached_from(name) <= {"literate_tools.chunks"}, reached_from(name)
+
+
+def test_the_example_runner_needs_neither_the_renderer_nor_the_site() -> None:
+    reached = reached_from("literate_tools.examples")
+    assert reached <= {"literate_tools.chunks", "literate_tools.xref"}, reached
+    test_module = ast.parse((ROOT / "tests" / "test_examples.py").read_text(encoding="utf-8"))
+    imported = {alias.name if isinstance(node, ast.Import) else f"{node.module}.{alias.name}"
+                for node in ast.walk(test_module) if isinstance(node, (ast.Import, ast.ImportFrom))
+                for alias in node.names}
+    ours = {module for module in imported if module.split(".")[0] in ("literate_tools", "weave", "tangle")}
+    assert ours == {"literate_tools.chunks", "literate_tools.examples"}, ours
+
+
+@pytest.mark.parametrize("program", ["tangle.py", "weave.py"])
+def test_the_programs_at_the_root_only_start_the_tooling(program: str) -> None:
+    tree = ast.parse((ROOT / program).read_text(encoding="utf-8"))
+    defined = [node.name for node in ast.walk(tree) if isinstance(node, (ast.FunctionDef, ast.ClassDef))]
+    assert not defined, f"{program} defines {defined}: the code belongs in literate_tools/"
+    assert len((ROOT / program).read_text(encoding="utf-8").splitlines()) <= 40, program

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import pytest
 
+import literate_tools.chunks
+import literate_tools.tangle
 import tangle
 from conftest import PROJECT_ROOT
 
@@ -444,9 +446,9 @@ def test_exponential_expansion_is_refused_naming_the_chunk_and_the_limit(tmp_pat
 def test_expanded_sizes_are_computed_without_expanding(tmp_path, monkeypatch) -> None:
     levels = 60
     root = make_project(tmp_path, {"a.md": exponential_document(levels)})
-    monkeypatch.setattr(tangle, "check_expansion", lambda web: None)
+    monkeypatch.setattr(literate_tools.chunks, "check_expansion", lambda web: None)
     web = tangle.read_web(root)
-    monkeypatch.setattr(tangle, "chunk_lines", None)  # any expansion would fail
+    monkeypatch.setattr(literate_tools.tangle, "chunk_lines", None)  # any expansion would fail
     lines = {levels: 2}  # the header comment and "x = 1"
     for k in reversed(range(levels)):
         lines[k] = 1 + 2 * lines[k + 1]
