@@ -8,6 +8,7 @@ generated from the literate documents in ``literate/`` by ``python tangle.py``.
 """
 from ident.batch import Job, JobResult, dask_executor, run_jobs
 from ident.continuous import to_continuous
+from ident.error_bars import model_uncertainty
 from ident.hankel import block_hankel, mosaic_hankel, time_major_permutation
 from ident.identification import IdentInfo, Offset, Reduction, UnstableModelWarning, ident, misfit
 from ident.model_file import load_model, save_model
@@ -16,6 +17,7 @@ from ident.representations import IllConditionedWarning, kernel_to_ss, ss_to_ker
 from ident.smoothing import MisfitWarning
 from ident.solver import InfeasibleKernelError, SLRAWarning, kernel_misfit
 from ident.structure import Structure
+from ident.uncertainty import Uncertainty, UncertaintyWarning
 from ident.validation import LagChoice, choose_lag, compare, fit_percent, misfit_vs_lag, resid, validate
 
 __all__ = [
@@ -24,6 +26,7 @@ __all__ = [
     "SLRAWarning",
     "MisfitWarning",
     "to_continuous",
+    "model_uncertainty", "Uncertainty", "UncertaintyWarning",
     "UnstableModelWarning", "IllConditionedWarning",
     "InfeasibleKernelError", "kernel_to_ss", "ss_to_kernel", "block_hankel", "mosaic_hankel",
     "time_major_permutation", "Job", "JobResult", "run_jobs", "dask_executor",
