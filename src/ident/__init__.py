@@ -16,6 +16,7 @@ from ident.reduction import balanced_truncation
 from ident.representations import IllConditionedWarning, kernel_to_ss, ss_to_kernel
 from ident.smoothing import MisfitWarning
 from ident.solver import InfeasibleKernelError, SLRAWarning, kernel_misfit
+from ident.stability import Stability
 from ident.structure import Structure
 from ident.uncertainty import Uncertainty, UncertaintyWarning
 from ident.validation import LagChoice, choose_lag, compare, fit_percent, misfit_vs_lag, resid, validate
@@ -26,7 +27,7 @@ __all__ = [
     "SLRAWarning",
     "MisfitWarning",
     "to_continuous",
-    "model_uncertainty", "Uncertainty", "UncertaintyWarning",
+    "model_uncertainty", "Uncertainty", "UncertaintyWarning", "Stability",
     "UnstableModelWarning", "IllConditionedWarning",
     "InfeasibleKernelError", "kernel_to_ss", "ss_to_kernel", "block_hankel", "mosaic_hankel",
     "time_major_permutation", "Job", "JobResult", "run_jobs", "dask_executor",
