@@ -1223,6 +1223,20 @@ UNCERTAINTY_CASES = [
      ValueError, 'draws must be an integer >= 2, got 1'),
     ('interval level 95', lambda: _error_bars()[2].uncertainty.interval("gain", 95),
      ValueError, 'level must be a number in \\(0, 1\\), got 95'),
+    ('stable text', lambda: ident(_error_bars()[0], 1, 2, stable="yes"),
+     TypeError, 'stable must be True or False, got str'),
+    ('margin zero', lambda: ident(_error_bars()[0], 1, 2, stable=True, margin=0),
+     ValueError, 'margin must be a number in \\(0, 1\\) \\(the spectral radius is kept at most 1 - margin\\), got 0'),
+    ('margin one', lambda: ident(_error_bars()[0], 1, 2, stable=True, margin=1.0),
+     ValueError, 'margin must be a number in \\(0, 1\\)'),
+    ('margin negative', lambda: ident(_error_bars()[0], 1, 2, stable=True, margin=-0.1),
+     ValueError, 'margin must be a number in \\(0, 1\\)'),
+    ('margin text', lambda: ident(_error_bars()[0], 1, 2, stable=True, margin="0.1"),
+     ValueError, "margin must be a number in \\(0, 1\\) \\(the spectral radius is kept at most 1 - margin\\), got '0.1'"),
+    ('margin nan', lambda: ident(_error_bars()[0], 1, 2, margin=float("nan")),
+     ValueError, 'margin must be a number in \\(0, 1\\)'),
+    ('stable with offset', lambda: ident(_error_bars()[0], 1, 2, offset=True, stable=True),
+     ValueError, 'stable=True is not available with offset=True yet'),
 ]
 
 
