@@ -153,9 +153,10 @@ def main() -> None:
     results = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
     results["monte_carlo"] = monte_carlo(arguments.runs)
     results["settings"] = {"sigma_ratio": SIGMA_RATIO, "level": 0.95, "bar": [0.92, 0.98]}
+    RESULTS.write_text(json.dumps(results, indent=1, sort_keys=True) + "\n")
     if not arguments.no_daisy:
         results["daisy"] = daisy_cost()
-    RESULTS.write_text(json.dumps(results, indent=1, sort_keys=True) + "\n")
+        RESULTS.write_text(json.dumps(results, indent=1, sort_keys=True) + "\n")
 
 
 if __name__ == "__main__":
