@@ -153,3 +153,22 @@ def test_without_uncertainty_nothing_is_computed() -> None:
         warnings.simplefilter("error", UncertaintyWarning)
         _, info, _, _ = ident(w, 1, 2)
     assert info.uncertainty is None
+
+
+def test_the_simulation_band_is_the_models_response_and_tends_to_the_gains() -> None:
+    w, _, _ = second_order_data(11)
+    sysh, info, _, _ = ident(w, 1, 2, uncertainty=True)
+    bars = info.uncertainty
+    u = np.random.default_rng(12).standard_normal((60, 1))
+    x0 = np.array([0.3, -0.2])
+    y, spread = bars.simulation(u, x0)
+    expected = control.forced_response(sysh, U=u.T, X0=x0).outputs
+    assert np.allclose(y[:, 0], expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
+    assert spread.shape == (60, 1) and np.all(spread[1:] > 0)
+    step_response, step_spread = bars.simulation(np.ones((400, 1)))  # from rest: y -> G(1), its std -> std(G(1))
+    assert np.isclose(step_response[-1, 0], bars.value("gain")[0, 0], rtol=1e-8)
+    assert np.isclose(step_spread[-1, 0], bars.std("gain")[0, 0], rtol=1e-4)
+    with pytest.raises(ValueError, match=r"u must be a finite \(T, m\) array with m = 1 columns"):
+        bars.simulation(np.ones((10, 2)))
+    with pytest.raises(ValueError, match="x0 must be a finite vector of the model's 2 states"):
+        bars.simulation(u, np.zeros(3))
