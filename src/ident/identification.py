@@ -26,7 +26,7 @@ from ident.solver import IllConditionedKernelError, InfeasibleKernelError, SLRAW
 from ident.solver.threads import one_blas_thread
 from ident.starts import STARTS
 from ident.structure import Structure, series_to_parameters
-from ident.stability import STABILITY_MARGIN, Stability, checked_stability, holdout_misfits, stable_choice
+from ident.stability import STABILITY_MARGIN, Stability, checked_stability, holdout_fits, stable_choice
 from ident.uncertainty import Uncertainty, checked_uncertainty, kernel_uncertainty
 
 __all__ = ["IdentInfo", "Candidate", "Reduction", "UnstableModelWarning", "ident", "misfit", "AUTO_STARTS", "Offset"]
@@ -626,7 +626,7 @@ def ident(w, m: int | None = None, ell: int | None = None, *, inputs=None, outpu
                                           refine) for name in start_names], executor)
         unconstrained = choose(attempts)
         chosen, stability = stable_choice(unconstrained, [] if affine else attempts, problem, m, ell, exponent, stable=stable,
-                                          margin=margin, options=options, holdout=lambda kernels: holdout_misfits(
+                                          margin=margin, options=options, holdout=lambda kernels: holdout_fits(
                                               kernels, series_scaled, initial_scaled, lambda s, i: identification_problem(
                                                   s, ell, exact, i), rank, m, ell, margin, options))
         result, kernel = chosen.result, chosen.candidate.Rh
