@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from conftest import recorded_warnings
-from ident import UnstableModelWarning, ident, misfit
+from ident import UnstableModelWarning, compare, ident, misfit
 
 SLOW_PLANT = control.ss(control.tf([0.05, 0.03], [1, -1.97, 0.975], 1))  # poles of modulus 0.987
 
@@ -35,6 +35,9 @@ def test_stable_true_keeps_the_radius_within_the_margin_at_a_reported_price(marg
     assert radius(model) <= 1 - margin and np.isclose(report.radius, radius(model), rtol=1e-10)
     assert report.rule == "stable=True" and report.constrained and report.unconstrained_radius > 1
     assert report.misfit_increase > 0 and np.isclose(report.misfit, info.M, rtol=1e-12)
+    assert set(report.fits) == {"unconstrained", "constrained"}
+    fit_here = float(compare(w, model).fit[0])  # the constrained fit's simulation fit on the same data
+    assert abs(report.fits["constrained"] - fit_here) < 1e-6 * max(1.0, abs(fit_here))
     M_model, _, _ = misfit(w, model)  # info.M is the misfit of the model returned
     assert abs(M_model - info.M) <= 1e-6 * info.M
     assert np.isclose(np.sum((w - wh) ** 2), info.M, rtol=1e-6)  # and wh its trajectory
