@@ -1252,3 +1252,66 @@ def test_forecast_warns_naming_the_spectral_radius_of_an_unstable_model() -> Non
     unstable = control.ss([[1.2]], [[1.0]], [[1.0]], [[0.0]], 1)
     with pytest.warns(UnstableModelWarning, match="spectral radius 1.2"):
         forecast(unstable, np.ones((3, 2)), np.zeros((30, 1)))
+
+# --- error bars (issue 34): uncertainty=True, model_uncertainty and Uncertainty's options ---
+from ident import model_uncertainty  # noqa: E402
+
+
+def _error_bars():
+    rng = np.random.default_rng(34)
+    u = rng.standard_normal(120)
+    y = np.convolve(u, [0.0, 0.5, 0.25])[:120] + 0.05 * rng.standard_normal(120)
+    w = np.column_stack([u, y])
+    sysh, info, _, _ = ident(w, 1, 2, uncertainty=True)
+    return w, sysh, info
+
+
+UNCERTAINTY_CASES = [
+    ('uncertainty text', lambda: ident(_error_bars()[0], 1, 2, uncertainty="yes"),
+     TypeError, 'uncertainty must be True or False, got str'),
+    ('uncertainty with offset', lambda: ident(_error_bars()[0], 1, 2, offset=True, uncertainty=True),
+     ValueError, 'uncertainty=True is not available with offset=True'),
+    ('uncertainty of a reduced model', lambda: ident(_error_bars()[0], 1, 2, n=1, uncertainty=True),
+     ValueError, 'uncertainty=True is for the identified model of order ell p = 2, not for a model reduced to n = 1'),
+    ('model_uncertainty other data', lambda: model_uncertainty(_error_bars()[0][:100], *_error_bars()[1:]),
+     ValueError, 'info is not from an identification on these data and options'),
+    ('model_uncertainty info not IdentInfo', lambda: model_uncertainty(_error_bars()[0], _error_bars()[1], {"Rh": 1}),
+     TypeError, 'info must be the IdentInfo that ident returned, got dict'),
+    ('model_uncertainty sysh not a model', lambda: model_uncertainty(_error_bars()[0], None, _error_bars()[2]),
+     TypeError, "sysh must be ident's discrete-time model with m = 1 inputs and p = 1 outputs"),
+    ('model_uncertainty w of other width', lambda: model_uncertainty(np.ones((50, 4)), *_error_bars()[1:]),
+     ValueError, 'info.Rh is 1 x 6, not p x \\(ell\\+1\\) q for w\'s q = 4'),
+    ('std of an unknown quantity', lambda: _error_bars()[2].uncertainty.std("zeros"),
+     ValueError, "what must be one of 'poles', 'gain', 'magnitude', 'phase', 'parameters'; got 'zeros'"),
+    ('std magnitude without omega', lambda: _error_bars()[2].uncertainty.std("magnitude"),
+     ValueError, "omega \\(frequencies in rad per time unit\\) is needed for 'magnitude'"),
+    ('std gain with omega', lambda: _error_bars()[2].uncertainty.std("gain", [1.0]),
+     ValueError, "omega is only for 'magnitude' and 'phase', not for 'gain'"),
+    ('std omega not finite', lambda: _error_bars()[2].uncertainty.std("phase", [np.nan]),
+     ValueError, 'omega must be a non-empty 1-d array of finite frequencies'),
+    ('std unknown method', lambda: _error_bars()[2].uncertainty.std("gain", method="bootstrap"),
+     ValueError, "method must be one of 'delta', 'monte carlo'; got 'bootstrap'"),
+    ('draws one', lambda: _error_bars()[2].uncertainty.draws("gain", draws=1),
+     ValueError, 'draws must be an integer >= 2, got 1'),
+    ('interval level 95', lambda: _error_bars()[2].uncertainty.interval("gain", 95),
+     ValueError, 'level must be a number in \\(0, 1\\), got 95'),
+    ('stable text', lambda: ident(_error_bars()[0], 1, 2, stable="yes"),
+     TypeError, 'stable must be True or False, got str'),
+    ('margin zero', lambda: ident(_error_bars()[0], 1, 2, stable=True, margin=0),
+     ValueError, 'margin must be a number in \\(0, 1\\) \\(the spectral radius is kept at most 1 - margin\\), got 0'),
+    ('margin one', lambda: ident(_error_bars()[0], 1, 2, stable=True, margin=1.0),
+     ValueError, 'margin must be a number in \\(0, 1\\)'),
+    ('margin negative', lambda: ident(_error_bars()[0], 1, 2, stable=True, margin=-0.1),
+     ValueError, 'margin must be a number in \\(0, 1\\)'),
+    ('margin text', lambda: ident(_error_bars()[0], 1, 2, stable=True, margin="0.1"),
+     ValueError, "margin must be a number in \\(0, 1\\) \\(the spectral radius is kept at most 1 - margin\\), got '0.1'"),
+    ('margin nan', lambda: ident(_error_bars()[0], 1, 2, margin=float("nan")),
+     ValueError, 'margin must be a number in \\(0, 1\\)'),
+    ('stable with offset', lambda: ident(_error_bars()[0], 1, 2, offset=True, stable=True),
+     ValueError, 'stable=True is not available with offset=True yet'),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", UNCERTAINTY_CASES, ids=[c[0] for c in UNCERTAINTY_CASES])
+def test_bad_options_of_the_error_bars_are_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

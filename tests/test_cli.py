@@ -1016,3 +1016,25 @@ def test_bad_options_of_complete_and_forecast_are_one_line(completion_files, tmp
     status, _, err = run_full([item.format(**names) for item in argv], capsys)
     assert status == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert re.search(words, err), err
+
+# --- identify --uncertainty, --stable, --margin (issue 34) ---
+
+def test_identify_prints_the_intervals_and_the_price_of_stability(data_csv, tmp_path, capsys):
+    status, out, err = run(["identify", data_csv, "--inputs", "u1,u2", "--outputs", "y", "--lag", 2, "--exact", "inputs",
+                            "--uncertainty", "--stable", "--model", tmp_path / "m.json", "--plot", tmp_path / "f.png"], capsys)
+    assert status == 0, err
+    assert "95 % intervals (first order; noise variance" in out
+    assert out.count("  pole ") == 2 and "gain u1 -> y:" in out and "gain u2 -> y:" in out
+    assert "stable: spectral radius" in out and "(the optimum was within the bound)" in out
+
+
+@pytest.mark.parametrize("options, words", [
+    (["--stable", "--margin", "0"], "argument --margin: must be a number in (0, 1), got 0"),
+    (["--stable", "--margin", "wide"], "argument --margin: must be a number in (0, 1), got 'wide'"),
+    (["--uncertainty", "--offset", "fit"], "--uncertainty and --offset fit: not available together yet"),
+    (["--stable", "--offset", "fit"], "--stable and --offset fit: not available together yet"),
+])
+def test_identify_refuses_bad_error_bar_options_in_one_line(options, words, data_csv, tmp_path, capsys):
+    status, out, err = run(["identify", data_csv, "--inputs", "u1,u2", "--outputs", "y", "--lag", 2, *options,
+                            "--model", tmp_path / "m.json", "--plot", tmp_path / "f.png"], capsys)
+    assert status == 2 and words in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
