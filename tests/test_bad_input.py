@@ -1179,3 +1179,37 @@ LAG_CHOICE_CASES = [
 @pytest.mark.parametrize("name, call, error, words", LAG_CHOICE_CASES, ids=[c[0] for c in LAG_CHOICE_CASES])
 def test_bad_options_of_the_lag_choice_are_refused_clearly(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# --- complexity from data (25-complexity.md): complexity and io_partitions ---
+from ident import complexity, io_partitions  # noqa: E402
+
+W_COMPLEXITY = np.random.default_rng(35).standard_normal((60, 2))
+
+COMPLEXITY_CASES = [
+    ('complexity tol zero', lambda: complexity(W_COMPLEXITY, tol=0),
+     ValueError, 'tol must be a relative rank tolerance, 0 < tol < 1, got 0'),
+    ('complexity tol negative', lambda: complexity(W_COMPLEXITY, tol=-1e-8),
+     ValueError, 'tol must be a relative rank tolerance, 0 < tol < 1, got -1e-08'),
+    ('complexity tol nan', lambda: complexity(W_COMPLEXITY, tol=float("nan")),
+     ValueError, 'tol must be a relative rank tolerance'),
+    ('complexity tol text', lambda: complexity(W_COMPLEXITY, tol="1e-8"),
+     TypeError, 'tol must be a number, a relative rank tolerance 0 < tol < 1, or None; got str'),
+    ('complexity too short', lambda: complexity(W_COMPLEXITY[:7]),
+     ValueError, 'w is too short to determine the complexity: it needs a Hankel matrix with 3 block rows'),
+    ('complexity transposed', lambda: complexity(W_COMPLEXITY.T),
+     ValueError, 'w is too short to determine the complexity'),
+    ('io_partitions m text', lambda: io_partitions(W_COMPLEXITY, "1"),
+     TypeError, 'm must be an integer'),
+    ('io_partitions m too large', lambda: io_partitions(W_COMPLEXITY, 3),
+     ValueError, 'm must'),
+    ('io_partitions m not the free variables', lambda: io_partitions(W_COMPLEXITY, 1),
+     ValueError, 'm = 1, but w has 2 free variables'),
+    ('io_partitions tol zero', lambda: io_partitions(W_COMPLEXITY, 2, tol=0.0),
+     ValueError, 'tol must be a relative rank tolerance'),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", COMPLEXITY_CASES, ids=[c[0] for c in COMPLEXITY_CASES])
+def test_bad_input_of_complexity_is_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

@@ -7,6 +7,7 @@ After I. Markovsky, "System identification by structured low-rank approximation"
 generated from the literate documents in ``literate/`` by ``python tangle.py``.
 """
 from ident.batch import Job, JobResult, dask_executor, run_jobs
+from ident.data_complexity import Complexity, IOPartition, complexity, io_partitions
 from ident.continuous import to_continuous
 from ident.hankel import block_hankel, mosaic_hankel, time_major_permutation
 from ident.identification import IdentInfo, Offset, Reduction, UnstableModelWarning, ident, misfit
@@ -24,6 +25,7 @@ __all__ = [
     "SLRAWarning",
     "MisfitWarning",
     "to_continuous",
+    "complexity", "io_partitions", "Complexity", "IOPartition",
     "UnstableModelWarning", "IllConditionedWarning",
     "InfeasibleKernelError", "kernel_to_ss", "ss_to_kernel", "block_hankel", "mosaic_hankel",
     "time_major_permutation", "Job", "JobResult", "run_jobs", "dask_executor",

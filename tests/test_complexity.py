@@ -1,0 +1,62 @@
+"""Complexity from data (25-complexity.md): (m, ell, n), the observability indices and the input sets
+of exact trajectories of random systems of every class, and the noise-aware order."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ident import complexity, io_partitions
+from ident.data_complexity import system_with_lags, valid_input_sets
+from ident.representations import make_ss, simulate
+
+CLASSES = [(2, (0, 0)), (1, (3,)), (2, (2, 2)), (2, (3, 2, 1)), (0, (2, 2)), (1, (4, 1)), (3, (1,)), (1, (2, 0))]
+
+
+def trajectories(m, lags, rng, lengths):
+    A, B, C, D = system_with_lags(lags, m, rng)
+    system, order = make_ss(A, B, C, D), rng.permutation(m + len(lags))
+    series = []
+    for length in lengths:
+        u = rng.standard_normal((length, m))
+        series.append(np.hstack([u, simulate(system, u if m else length, rng.standard_normal(sum(lags)))])[:, order])
+    where = np.argsort(order)
+    return series, {tuple(sorted(int(where[k]) for k in inputs)) for inputs in valid_input_sets(D, m)}
+
+
+@pytest.mark.parametrize("m, lags", CLASSES, ids=[f"m{m}-lags{'-'.join(map(str, lags))}" for m, lags in CLASSES])
+def test_exact_trajectories_give_the_complexity_and_the_input_sets(m, lags) -> None:
+    rng = np.random.default_rng(sum(lags) * 10 + m)
+    for trial in range(2):
+        series, true_sets = trajectories(m, lags, rng, [200] if trial == 0 else [90, 80, 70])
+        found = complexity(series)
+        assert (found.m, found.ell, found.n) == (m, max(lags), sum(lags))
+        assert found.lags == tuple(sorted(lags, reverse=True))
+        assert found.ranks[-1] == len(found.ranks) * m + found.n  # the rank formula where it has settled
+        partitions = io_partitions(series, m)
+        assert {p.inputs for p in partitions if p.valid} == true_sets
+        freedoms = [p.freedom for p in partitions]
+        assert freedoms == sorted(freedoms, reverse=True) and all(0 <= f <= 1 + 1e-12 for f in freedoms)
+
+
+def test_the_data_are_not_modified_and_units_do_not_matter() -> None:
+    rng = np.random.default_rng(7)
+    (w,), _ = trajectories(2, (3, 2, 1), rng, [200])
+    kept = w.copy()
+    found = complexity(w)
+    assert np.array_equal(w, kept)
+    rescaled = complexity(w * np.array([1e6, 1e-4, 1.0, 3e3, 1e-8]))
+    assert (rescaled.m, rescaled.n, rescaled.lags) == (found.m, found.n, found.lags)
+
+
+def test_a_short_record_is_refused_not_guessed() -> None:
+    rng = np.random.default_rng(8)
+    (w,), _ = trajectories(1, (6,), rng, [20])  # widest window 6 block rows: the lag 6 cannot be seen to settle
+    with pytest.raises(ValueError, match="too short or not exact enough"):
+        complexity(w)
+
+
+def test_io_partitions_wants_the_number_of_free_variables() -> None:
+    rng = np.random.default_rng(9)
+    (w,), _ = trajectories(1, (2, 1), rng, [150])
+    with pytest.raises(ValueError, match="w has 1 free variables"):
+        io_partitions(w, 2)
