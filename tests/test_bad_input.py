@@ -1075,8 +1075,7 @@ ROLE_CASES = [
      r"outputs: no column of w is left as an output"),
     ('ident: m disagrees', lambda: ident(W, 2, 1, inputs=[0]), ValueError,
      r"inputs names 1 input\(s\), but m = 2: they must agree"),
-    ('ident: neither m nor roles', lambda: ident(W, ell=1), TypeError,
-     r"m, the number of inputs, must be given \(or inputs= or outputs=, which imply it\)"),
+    # ident(W, ell=1), neither m nor roles, takes m from complexity(W) since issue 35 (test_complexity.py)
     ('ident: a name not a column', lambda: ident(FRAME, ell=1, inputs=["speed"]), ValueError,
      r"inputs names 'speed', which is not a column of w"),
     ('ident: frame, a name twice', lambda: ident(FRAME, ell=1, outputs=["angle", "angle"]), ValueError,

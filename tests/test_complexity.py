@@ -76,3 +76,19 @@ def test_noisy_trajectories_give_the_order(m, lags) -> None:
 def test_white_noise_has_no_state() -> None:
     found = complexity(np.random.default_rng(11).standard_normal((800, 3)), noisy=True)
     assert (found.n, found.ell) == (0, 0)
+
+
+def test_ident_takes_m_and_ell_from_the_data_when_left_out() -> None:
+    from ident import ident
+    rng = np.random.default_rng(12)
+    A, B, C, D = system_with_lags((2, 2), 1, rng)
+    u = rng.standard_normal((500, 1))
+    w = np.hstack([u, simulate(make_ss(A, B, C, D), u, rng.standard_normal(4))])
+    sysh, info, _, _ = ident(w)  # exact: the exact rule
+    assert (sysh.ninputs, sysh.nstates) == (1, 4) and info.complexity.depth > 5
+    assert info.M < 1e-12 * np.sum(w ** 2)
+    noisy = w + 0.1 * w.std(axis=0) * rng.standard_normal(w.shape)
+    sysh, info, _, _ = ident(noisy, ell=2)  # m from the noisy rule, ell as given
+    assert (sysh.ninputs, sysh.nstates) == (info.complexity.m, 2 * (3 - info.complexity.m))
+    _, info, _, _ = ident(noisy, 1, 2)
+    assert info.complexity is None  # both given: nothing found
