@@ -1204,6 +1204,8 @@ COMPLEXITY_CASES = [
      ValueError, 'noisy=True takes none'),
     ('complexity noisy too short', lambda: complexity(W_COMPLEXITY[:5], noisy=True),
      ValueError, 'w is too short to determine the complexity from noisy data'),
+    ('ident order_fit unknown', lambda: ident(np.random.default_rng(1).standard_normal((80, 3)), 1, 2, n=2, order_fit="direct"),
+     ValueError, "order_fit must be one of 'truncation', 'misfit', got 'direct'"),
     ('io_partitions m text', lambda: io_partitions(W_COMPLEXITY, "1"),
      TypeError, 'm must be an integer'),
     ('io_partitions m too large', lambda: io_partitions(W_COMPLEXITY, 3),

@@ -92,3 +92,29 @@ def test_ident_takes_m_and_ell_from_the_data_when_left_out() -> None:
     assert (sysh.ninputs, sysh.nstates) == (info.complexity.m, 2 * (3 - info.complexity.m))
     _, info, _, _ = ident(noisy, 1, 2)
     assert info.complexity is None  # both given: nothing found
+
+
+@pytest.mark.parametrize("output_error", [False, True], ids=["eiv", "oe"])
+def test_the_order_inside_the_misfit_is_at_most_the_truncations(output_error) -> None:
+    import warnings
+
+    from ident import ident, misfit
+    rng = np.random.default_rng(36 + output_error)
+    A, B, C, D = system_with_lags((2, 1), 1, rng)
+    series = []
+    for length in (150, 120):
+        u = rng.standard_normal((length, 1))
+        w = np.hstack([u, simulate(make_ss(A, B, C, D), u, rng.standard_normal(3))])
+        noisy = w + 0.1 * w.std(axis=0) * rng.standard_normal(w.shape)
+        if output_error:
+            noisy[:, :1] = w[:, :1]
+        series.append(noisy)
+    exct = [0] if output_error else None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _, truncated, _, _ = ident(series, 1, 2, n=3, exct=exct)
+        model, fitted, wh, _ = ident(series, 1, 2, n=3, exct=exct, order_fit="misfit")
+    assert model.nstates == 3 and fitted.reduction.misfits["balanced truncation"] == pytest.approx(truncated.M, rel=1e-8)
+    assert fitted.M <= truncated.M * (1 + 1e-10)
+    assert fitted.M == pytest.approx(misfit(series, model, exct=exct)[0], rel=1e-6)  # the model's own misfit
+    assert fitted.M == pytest.approx(sum(np.sum((w - x) ** 2) for w, x in zip(series, wh)), rel=1e-6)
