@@ -1075,8 +1075,7 @@ ROLE_CASES = [
      r"outputs: no column of w is left as an output"),
     ('ident: m disagrees', lambda: ident(W, 2, 1, inputs=[0]), ValueError,
      r"inputs names 1 input\(s\), but m = 2: they must agree"),
-    ('ident: neither m nor roles', lambda: ident(W, ell=1), TypeError,
-     r"m, the number of inputs, must be given \(or inputs= or outputs=, which imply it\)"),
+    # ident(W, ell=1), neither m nor roles, takes m from complexity(W) since issue 35 (test_complexity.py)
     ('ident: a name not a column', lambda: ident(FRAME, ell=1, inputs=["speed"]), ValueError,
      r"inputs names 'speed', which is not a column of w"),
     ('ident: frame, a name twice', lambda: ident(FRAME, ell=1, outputs=["angle", "angle"]), ValueError,
@@ -1314,4 +1313,46 @@ UNCERTAINTY_CASES = [
 
 @pytest.mark.parametrize("name, call, error, words", UNCERTAINTY_CASES, ids=[c[0] for c in UNCERTAINTY_CASES])
 def test_bad_options_of_the_error_bars_are_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# --- complexity from data (25-complexity.md): complexity and io_partitions ---
+from ident import complexity, io_partitions  # noqa: E402
+
+W_COMPLEXITY = np.random.default_rng(35).standard_normal((60, 2))
+
+COMPLEXITY_CASES = [
+    ('complexity tol zero', lambda: complexity(W_COMPLEXITY, tol=0),
+     ValueError, 'tol must be a relative rank tolerance, 0 < tol < 1, got 0'),
+    ('complexity tol negative', lambda: complexity(W_COMPLEXITY, tol=-1e-8),
+     ValueError, 'tol must be a relative rank tolerance, 0 < tol < 1, got -1e-08'),
+    ('complexity tol nan', lambda: complexity(W_COMPLEXITY, tol=float("nan")),
+     ValueError, 'tol must be a relative rank tolerance'),
+    ('complexity tol text', lambda: complexity(W_COMPLEXITY, tol="1e-8"),
+     TypeError, 'tol must be a number, a relative rank tolerance 0 < tol < 1, or None; got str'),
+    ('complexity too short', lambda: complexity(W_COMPLEXITY[:7]),
+     ValueError, 'w is too short to determine the complexity: it needs a Hankel matrix with 3 block rows'),
+    ('complexity transposed', lambda: complexity(W_COMPLEXITY.T),
+     ValueError, 'w is too short to determine the complexity'),
+    ('complexity noisy not a bool', lambda: complexity(W_COMPLEXITY, noisy="yes"),
+     TypeError, "noisy must be True or False, got 'yes'"),
+    ('complexity noisy with tol', lambda: complexity(W_COMPLEXITY, noisy=True, tol=1e-8),
+     ValueError, 'noisy=True takes none'),
+    ('complexity noisy too short', lambda: complexity(W_COMPLEXITY[:5], noisy=True),
+     ValueError, 'w is too short to determine the complexity from noisy data'),
+    ('ident order_fit unknown', lambda: ident(np.random.default_rng(1).standard_normal((80, 3)), 1, 2, n=2, order_fit="direct"),
+     ValueError, "order_fit must be one of 'truncation', 'misfit', got 'direct'"),
+    ('io_partitions m text', lambda: io_partitions(W_COMPLEXITY, "1"),
+     TypeError, 'm must be an integer'),
+    ('io_partitions m too large', lambda: io_partitions(W_COMPLEXITY, 3),
+     ValueError, 'm must'),
+    ('io_partitions m not the free variables', lambda: io_partitions(W_COMPLEXITY, 1),
+     ValueError, 'm = 1, but w has 2 free variables'),
+    ('io_partitions tol zero', lambda: io_partitions(W_COMPLEXITY, 2, tol=0.0),
+     ValueError, 'tol must be a relative rank tolerance'),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", COMPLEXITY_CASES, ids=[c[0] for c in COMPLEXITY_CASES])
+def test_bad_input_of_complexity_is_refused_clearly(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)

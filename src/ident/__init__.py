@@ -8,6 +8,7 @@ generated from the literate documents in ``literate/`` by ``python tangle.py``.
 """
 from ident.batch import Job, JobResult, dask_executor, run_jobs
 from ident.completion import Completion, Forecast, InputPrior, complete, forecast
+from ident.data_complexity import Complexity, IOPartition, complexity, io_partitions
 from ident.continuous import to_continuous
 from ident.error_bars import model_uncertainty
 from ident.hankel import block_hankel, mosaic_hankel, time_major_permutation
@@ -29,6 +30,7 @@ __all__ = [
     "MisfitWarning",
     "to_continuous",
     "model_uncertainty", "Uncertainty", "UncertaintyWarning", "Stability",
+    "complexity", "io_partitions", "Complexity", "IOPartition",
     "UnstableModelWarning", "IllConditionedWarning",
     "InfeasibleKernelError", "kernel_to_ss", "ss_to_kernel", "block_hankel", "mosaic_hankel",
     "time_major_permutation", "Job", "JobResult", "run_jobs", "dask_executor",

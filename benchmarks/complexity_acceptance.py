@@ -1,0 +1,111 @@
+"""Issue 35's acceptance for complexity from data: random systems of five classes, exact and noisy. Not a test.
+
+Exact part: for each of CASES systems (the classes in turn: static, SISO, MIMO with equal indices,
+m = 2 and p = 3 with indices 3, 2, 1, autonomous; see `ident.data_complexity.system_with_lags`), one
+trajectory of 300 samples or three of 120 (every other case), white input, random initial state,
+the variables in a random order. Scored: complexity(w) gives the true (m, ell, n) and indices; the
+valid sets of io_partitions(w, m) are the true ones (`valid_input_sets` of the system's D).
+
+Noisy part: the same classes, 1000 samples, 10 % noise on every variable (standard deviation 0.1
+times the variable's own); scored: complexity(w, noisy=True).n is the true order.
+
+Writes benchmarks/results/complexity.json. Takes a few minutes.
+
+Usage: python benchmarks/complexity_acceptance.py [CASES] [NOISY_CASES]   (defaults 500 and 200; 0 keeps that part's last results)
+"""
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ident import complexity, io_partitions
+from ident.data_complexity import system_with_lags, valid_input_sets
+from ident.representations import make_ss, simulate
+
+CLASSES = {  # name: (m, observability indices)
+    "static (m = 2, p = 2)": (2, (0, 0)),
+    "SISO (ell = 3)": (1, (3,)),
+    "MIMO equal (m = 2, 2, 2)": (2, (2, 2)),
+    "MIMO unequal (m = 2, 3, 2, 1)": (2, (3, 2, 1)),
+    "autonomous (2, 2)": (0, (2, 2)),
+}
+
+
+def trajectory(m, lags, rng, lengths):
+    """A random system of the class and its trajectories (columns in a random order)."""
+    A, B, C, D = system_with_lags(lags, m, rng)
+    system, order = make_ss(A, B, C, D), rng.permutation(m + len(lags))
+    series = []
+    for length in lengths:
+        u = rng.standard_normal((length, m))
+        series.append(np.hstack([u, simulate(system, u if m else length, rng.standard_normal(sum(lags)))])[:, order])
+    where = np.argsort(order)  # where[k]: the column of w that holds variable k of [u y]
+    true_sets = {tuple(sorted(int(where[k]) for k in inputs)) for inputs in valid_input_sets(D, m)}
+    return series, true_sets
+
+
+def exact_part(cases, rng):
+    scores = {name: {"cases": 0, "complexity_right": 0, "partitions_right": 0} for name in CLASSES}
+    failures = []
+    for case in range(cases):
+        name = list(CLASSES)[case % len(CLASSES)]
+        m, lags = CLASSES[name]
+        series, true_sets = trajectory(m, lags, rng, [300] if case % 2 == 0 else [120, 120, 120])
+        row = scores[name]
+        row["cases"] += 1
+        try:
+            found = complexity(series)
+            right = (found.m, found.ell, found.n, found.lags) == (m, max(lags), sum(lags), tuple(sorted(lags, reverse=True)))
+            sets = {p.inputs for p in io_partitions(series, m) if p.valid}
+        except ValueError as error:
+            failures.append(f"case {case} ({name}): {error}")
+            continue
+        row["complexity_right"] += right
+        row["partitions_right"] += sets == true_sets
+        if not right or sets != true_sets:
+            failures.append(f"case {case} ({name}): found {found}, sets {sorted(sets)} vs {sorted(true_sets)}")
+    return {"cases": cases, "complexity_right": sum(r["complexity_right"] for r in scores.values()),
+            "partitions_right": sum(r["partitions_right"] for r in scores.values()), "classes": scores,
+            "failures": failures[:20]}
+
+
+def noisy_part(cases, rng):
+    scores = {name: {"cases": 0, "order_right": 0, "orders": []} for name in CLASSES}
+    for case in range(cases):
+        name = list(CLASSES)[case % len(CLASSES)]
+        m, lags = CLASSES[name]
+        (w,), _ = trajectory(m, lags, rng, [1000])
+        w = w + 0.1 * w.std(axis=0) * rng.standard_normal(w.shape)
+        row = scores[name]
+        row["cases"] += 1
+        try:
+            order = complexity(w, noisy=True).n
+        except ValueError:
+            order = -1
+        row["order_right"] += order == sum(lags)
+        row["orders"].append(order)
+    return {"cases": cases, "order_right": sum(r["order_right"] for r in scores.values()), "classes": scores}
+
+
+def main(argv):
+    cases = int(argv[0]) if argv else 500
+    noisy_cases = int(argv[1]) if len(argv) > 1 else 200
+    started = time.perf_counter()
+    out = Path(__file__).resolve().parent / "results" / "complexity.json"
+    results = json.loads(out.read_text()) if out.exists() else {}  # a part run with 0 cases is kept from the last run
+    results["benchmark"] = "benchmarks/complexity_acceptance.py"
+    if cases:
+        results["exact"] = exact_part(cases, np.random.default_rng(35))
+        print(f"exact: complexity right {results['exact']['complexity_right']}/{cases}, "
+              f"input sets right {results['exact']['partitions_right']}/{cases} ({time.perf_counter() - started:.0f} s)")
+    if noisy_cases:
+        results["noisy"] = noisy_part(noisy_cases, np.random.default_rng(3535))
+        print(f"noisy: order right {results['noisy']['order_right']}/{noisy_cases}")
+    out.write_text(json.dumps(results, indent=1) + "\n")
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

@@ -1,0 +1,120 @@
+"""Complexity from data (25-complexity.md): (m, ell, n), the observability indices and the input sets
+of exact trajectories of random systems of every class, and the noise-aware order."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ident import complexity, io_partitions
+from ident.data_complexity import system_with_lags, valid_input_sets
+from ident.representations import make_ss, simulate
+
+CLASSES = [(2, (0, 0)), (1, (3,)), (2, (2, 2)), (2, (3, 2, 1)), (0, (2, 2)), (1, (4, 1)), (3, (1,)), (1, (2, 0))]
+
+
+def trajectories(m, lags, rng, lengths):
+    A, B, C, D = system_with_lags(lags, m, rng)
+    system, order = make_ss(A, B, C, D), rng.permutation(m + len(lags))
+    series = []
+    for length in lengths:
+        u = rng.standard_normal((length, m))
+        series.append(np.hstack([u, simulate(system, u if m else length, rng.standard_normal(sum(lags)))])[:, order])
+    where = np.argsort(order)
+    return series, {tuple(sorted(int(where[k]) for k in inputs)) for inputs in valid_input_sets(D, m)}
+
+
+@pytest.mark.parametrize("m, lags", CLASSES, ids=[f"m{m}-lags{'-'.join(map(str, lags))}" for m, lags in CLASSES])
+def test_exact_trajectories_give_the_complexity_and_the_input_sets(m, lags) -> None:
+    rng = np.random.default_rng(sum(lags) * 10 + m)
+    for trial in range(2):
+        series, true_sets = trajectories(m, lags, rng, [200] if trial == 0 else [90, 80, 70])
+        found = complexity(series)
+        assert (found.m, found.ell, found.n) == (m, max(lags), sum(lags))
+        assert found.lags == tuple(sorted(lags, reverse=True))
+        assert found.ranks[-1] == len(found.ranks) * m + found.n  # the rank formula where it has settled
+        partitions = io_partitions(series, m)
+        assert {p.inputs for p in partitions if p.valid} == true_sets
+        freedoms = [p.freedom for p in partitions]
+        assert freedoms == sorted(freedoms, reverse=True) and all(0 <= f <= 1 + 1e-12 for f in freedoms)
+
+
+def test_the_data_are_not_modified_and_units_do_not_matter() -> None:
+    rng = np.random.default_rng(7)
+    (w,), _ = trajectories(2, (3, 2, 1), rng, [200])
+    kept = w.copy()
+    found = complexity(w)
+    assert np.array_equal(w, kept)
+    rescaled = complexity(w * np.array([1e6, 1e-4, 1.0, 3e3, 1e-8]))
+    assert (rescaled.m, rescaled.n, rescaled.lags) == (found.m, found.n, found.lags)
+
+
+def test_a_short_record_is_refused_not_guessed() -> None:
+    rng = np.random.default_rng(8)
+    (w,), _ = trajectories(1, (6,), rng, [20])  # widest window 6 block rows: the lag 6 cannot be seen to settle
+    with pytest.raises(ValueError, match="too short or not exact enough"):
+        complexity(w)
+
+
+def test_io_partitions_wants_the_number_of_free_variables() -> None:
+    rng = np.random.default_rng(9)
+    (w,), _ = trajectories(1, (2, 1), rng, [150])
+    with pytest.raises(ValueError, match="w has 1 free variables"):
+        io_partitions(w, 2)
+
+
+@pytest.mark.parametrize("m, lags", [(1, (3,)), (2, (2, 2)), (2, (0, 0))], ids=["siso", "mimo-equal", "static"])
+def test_noisy_trajectories_give_the_order(m, lags) -> None:
+    rng = np.random.default_rng(350 + sum(lags))
+    right = 0
+    for _ in range(3):
+        (w,), _ = trajectories(m, lags, rng, [1000])
+        noisy = w + 0.1 * w.std(axis=0) * rng.standard_normal(w.shape)
+        right += complexity(noisy, noisy=True).n == sum(lags)
+    assert right >= 2  # the benchmark's rate for these classes is above 85 %
+
+
+def test_white_noise_has_no_state() -> None:
+    found = complexity(np.random.default_rng(11).standard_normal((800, 3)), noisy=True)
+    assert (found.n, found.ell) == (0, 0)
+
+
+def test_ident_takes_m_and_ell_from_the_data_when_left_out() -> None:
+    from ident import ident
+    rng = np.random.default_rng(12)
+    A, B, C, D = system_with_lags((2, 2), 1, rng)
+    u = rng.standard_normal((500, 1))
+    w = np.hstack([u, simulate(make_ss(A, B, C, D), u, rng.standard_normal(4))])
+    sysh, info, _, _ = ident(w)  # exact: the exact rule
+    assert (sysh.ninputs, sysh.nstates) == (1, 4) and info.complexity.depth > 5
+    assert info.M < 1e-12 * np.sum(w ** 2)
+    noisy = w + 0.1 * w.std(axis=0) * rng.standard_normal(w.shape)
+    sysh, info, _, _ = ident(noisy, ell=2)  # m from the noisy rule, ell as given
+    assert (sysh.ninputs, sysh.nstates) == (info.complexity.m, 2 * (3 - info.complexity.m))
+    _, info, _, _ = ident(noisy, 1, 2)
+    assert info.complexity is None  # both given: nothing found
+
+
+@pytest.mark.parametrize("output_error", [False, True], ids=["eiv", "oe"])
+def test_the_order_inside_the_misfit_is_at_most_the_truncations(output_error) -> None:
+    import warnings
+
+    from ident import ident, misfit
+    rng = np.random.default_rng(36 + output_error)
+    A, B, C, D = system_with_lags((2, 1), 1, rng)
+    series = []
+    for length in (150, 120):
+        u = rng.standard_normal((length, 1))
+        w = np.hstack([u, simulate(make_ss(A, B, C, D), u, rng.standard_normal(3))])
+        noisy = w + 0.1 * w.std(axis=0) * rng.standard_normal(w.shape)
+        if output_error:
+            noisy[:, :1] = w[:, :1]
+        series.append(noisy)
+    exct = [0] if output_error else None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _, truncated, _, _ = ident(series, 1, 2, n=3, exct=exct)
+        model, fitted, wh, _ = ident(series, 1, 2, n=3, exct=exct, order_fit="misfit")
+    assert model.nstates == 3 and fitted.reduction.misfits["balanced truncation"] == pytest.approx(truncated.M, rel=1e-8)
+    assert fitted.M <= truncated.M * (1 + 1e-10)
+    assert fitted.M == pytest.approx(misfit(series, model, exct=exct)[0], rel=1e-6)  # the model's own misfit
+    assert fitted.M == pytest.approx(sum(np.sum((w - x) ** 2) for w, x in zip(series, wh)), rel=1e-6)
