@@ -307,8 +307,9 @@ def test_balanced_truncation_of_a_model_without_inputs_uses_its_initial_states()
 
 
 @pytest.mark.parametrize("n, error, words", [
-    (3, ValueError, r"n must satisfy 0 <= n <= 2 = ell \* p"),
-    (-1, ValueError, r"n must satisfy 0 <= n <= 2"),
+    (3, ValueError, r"n must satisfy 1 <= n <= 2 = ell \* p"),
+    (-1, ValueError, r"n must satisfy 1 <= n <= 2"),
+    (0, ValueError, r"n must satisfy 1 <= n <= 2 = ell \* p, the order of the identified model \(a static model is ell = 0"),
     (1.5, TypeError, r"n must be an integer"),
     ("1", TypeError, r"n must be an integer"),
 ])
