@@ -70,7 +70,7 @@ class Forecast:
     n_past : int
         The samples of the past: ``w[n_past:]`` is the future.
     method : str
-        "model" or "data-driven".
+        "model", "model with a state prior" or "data-driven".
     """
 
     y: object
