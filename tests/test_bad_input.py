@@ -1356,3 +1356,53 @@ COMPLEXITY_CASES = [
 @pytest.mark.parametrize("name, call, error, words", COMPLEXITY_CASES, ids=[c[0] for c in COMPLEXITY_CASES])
 def test_bad_input_of_complexity_is_refused_clearly(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# ---- the state prior of forecast (23-completion-and-forecasting.md, issue 33's robot arm) ----
+def _state_prior_cases():
+    from ident import StatePrior, forecast
+    system, w = _completion_system(), _completion_data()
+    prior = StatePrior(np.zeros(2), np.eye(2), 0.1)
+    frame = None
+    try:
+        import pandas
+        frame = pandas.DataFrame(w, columns=["u[0]", "y[0]"])
+    except ImportError:  # pragma: no cover - pandas is optional
+        pass
+    cases = [
+        ('forecast state prior not a StatePrior', lambda: forecast(system, w, np.zeros((5, 1)), state_prior=(0.0, 1.0)),
+         TypeError, 'state_prior must be an ident.StatePrior, got tuple'),
+        ('forecast state prior of the wrong order', lambda: forecast(system, w, np.zeros((5, 1)),
+                                                                      state_prior=StatePrior(np.zeros(3), np.eye(3), 0.1)),
+         ValueError, 'state_prior must have a finite mean of shape \\(2,\\), a symmetric positive definite cov'),
+        ('forecast state prior singular', lambda: forecast(system, w, np.zeros((5, 1)),
+                                                            state_prior=StatePrior(np.zeros(2), np.zeros((2, 2)), 0.1)),
+         ValueError, 'symmetric positive definite cov of shape \\(2, 2\\)'),
+        ('forecast state prior negative noise', lambda: forecast(system, w, np.zeros((5, 1)),
+                                                                  state_prior=StatePrior(np.zeros(2), np.eye(2), -1.0)),
+         ValueError, 'a finite noise >= 0, got shapes \\(2,\\), \\(2, 2\\) and noise -1.0'),
+        ('forecast state prior with weights', lambda: forecast(system, w, np.zeros((5, 1)), weights=[1.0, 2.0],
+                                                                state_prior=prior),
+         ValueError, 'state_prior is taken with a model sys, without w_ref and without weights'),
+        ('forecast state prior exact output', lambda: forecast(system, w, np.zeros((5, 1)), exct=[1], state_prior=prior),
+         ValueError, 'exct with state_prior names inputs only \\(positions below m = 1\\), got \\[1\\]'),
+        ('state prior from a static model', lambda: StatePrior.from_data(w, control.ss([], [], [], [[1.0]], 1)),
+         ValueError, 'sys has no state \\(order 0\\)'),
+        ('state prior from too short data', lambda: StatePrior.from_data(w[:2], system),
+         ValueError, 'w must have more than 2 samples \\(the lag of sys\\) in every series'),
+        ('state prior from data without excitation', lambda: StatePrior.from_data(np.zeros((30, 2)), system),
+         ValueError, 'the states of sys along its trajectory closest to w do not span its 2 dimensions'),
+    ]
+    if frame is not None:
+        cases.append(('forecast state prior with a DataFrame',
+                      lambda: forecast(system, frame, frame[["u[0]"]].iloc[:5], state_prior=prior),
+                      TypeError, 'state_prior takes w_past and u_future as arrays'))
+    return cases
+
+
+STATE_PRIOR_CASES = _state_prior_cases()
+
+
+@pytest.mark.parametrize("name, call, error, words", STATE_PRIOR_CASES, ids=[c[0] for c in STATE_PRIOR_CASES])
+def test_bad_input_of_the_state_prior_is_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

@@ -7,7 +7,7 @@ After I. Markovsky, "System identification by structured low-rank approximation"
 generated from the literate documents in ``literate/`` by ``python tangle.py``.
 """
 from ident.batch import Job, JobResult, dask_executor, run_jobs
-from ident.completion import Completion, Forecast, InputPrior, complete, forecast
+from ident.completion import Completion, Forecast, InputPrior, StatePrior, complete, forecast
 from ident.data_complexity import Complexity, IOPartition, complexity, io_partitions
 from ident.continuous import to_continuous
 from ident.error_bars import model_uncertainty
@@ -34,6 +34,6 @@ __all__ = [
     "UnstableModelWarning", "IllConditionedWarning",
     "InfeasibleKernelError", "kernel_to_ss", "ss_to_kernel", "block_hankel", "mosaic_hankel",
     "time_major_permutation", "Job", "JobResult", "run_jobs", "dask_executor",
-    "complete", "forecast", "Completion", "Forecast", "InputPrior",
+    "complete", "forecast", "Completion", "Forecast", "InputPrior", "StatePrior",
 ]
 __version__ = "0.1.0"
