@@ -56,7 +56,8 @@ def run(w_identification, w_validation, m: int, ell: int, mode: str, way: str) -
     return {"fit": fit, "misfit": info.M, "spectral_radius": radius, "seconds": time.perf_counter() - started,
             "rule": None if stability is None else stability.rule,
             "constrained": bool(stability is not None and stability.constrained),
-            "holdout": None if stability is None else stability.holdout}
+            "holdout": None if stability is None else stability.holdout,
+            "start": None if stability is None else stability.start}
 
 
 def main(names) -> None:

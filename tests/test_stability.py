@@ -8,7 +8,10 @@ import numpy as np
 import pytest
 
 from conftest import recorded_warnings
+import ident.stability as stability
 from ident import UnstableModelWarning, compare, ident, misfit
+from ident.stability import clipped
+from ident.uncertainty import matched, state_matrix
 
 SLOW_PLANT = control.ss(control.tf([0.05, 0.03], [1, -1.97, 0.975], 1))  # poles of modulus 0.987
 
@@ -78,3 +81,59 @@ def test_a_stable_optimum_is_left_alone() -> None:
     assert plain.stability is None and info.stability.rule == "within the bound"
     assert not info.stability.constrained and info.stability.misfit_increase == 0
     assert np.array_equal(info.Rh, plain.Rh) and radius(model) < 1
+
+
+# The clipped start (the unconstrained optimum with only its unstable poles moved onto the bound)
+
+def random_kernel(rng, p: int, m: int, ell: int) -> np.ndarray:
+    kernel = rng.standard_normal((p, (ell + 1) * (m + p)))
+    kernel[:, -p:] = -np.eye(p)  # P_ell = I
+    return kernel
+
+
+def poles_of(kernel, m: int, ell: int) -> np.ndarray:
+    return np.linalg.eigvals(state_matrix(kernel, m, ell))
+
+
+@pytest.mark.parametrize("p, m, ell, seed", [(1, 1, 3, 1), (1, 1, 3, 2), (1, 2, 4, 0), (2, 1, 2, 0), (2, 2, 3, 5)])
+def test_clipped_moves_the_unstable_poles_onto_the_bound_and_nothing_else(p: int, m: int, ell: int, seed: int) -> None:
+    kernel = random_kernel(np.random.default_rng(seed), p, m, ell)
+    before, bound = poles_of(kernel, m, ell), 0.999
+    unstable = np.abs(before) > bound
+    assert unstable.any() and not unstable.all()  # the cases move some poles and keep others
+    complex_unstable = np.any(unstable & (np.abs(before.imag) > 1e-12))
+    assert complex_unstable == (p == 1)  # complex pairs moved with one output; several: exact for real poles
+    moved = clipped(kernel, m, ell, bound)
+    expected = np.where(unstable, bound * before / np.abs(before), before)
+    after = matched(poles_of(moved, m, ell), expected)
+    scale = np.max(np.abs(before))
+    assert np.max(np.abs(after - expected)) <= 1e-9 * scale
+    blocks, moved_blocks = kernel.reshape(p, ell + 1, -1), moved.reshape(p, ell + 1, -1)
+    assert np.array_equal(moved_blocks[:, :, :m], blocks[:, :, :m])  # Q kept
+    assert np.array_equal(moved[:, -p:], -np.eye(p))  # P_ell = I kept
+    assert np.array_equal(clipped(moved, m, ell, 1.0), moved)  # nothing to move: unchanged
+    assert kernel[0, 0] == random_kernel(np.random.default_rng(seed), p, m, ell)[0, 0]  # the caller's array untouched
+
+
+def unstable_plant_data(seed: int) -> np.ndarray:
+    """An unstable plant (poles 1.03 and 0.95), 200 samples, 2 % errors on both variables."""
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal(200)
+    plant = control.ss(control.tf([0.1, 0.05], np.poly([1.03, 0.95]), 1))
+    w_true = np.column_stack([u, control.forced_response(plant, U=u).outputs])
+    return w_true + 0.02 * w_true.std(axis=0) * rng.standard_normal(w_true.shape)
+
+
+@pytest.mark.parametrize("exact", [None, [0]])
+def test_the_clipped_start_never_raises_the_constrained_misfit(exact, monkeypatch) -> None:
+    w = unstable_plant_data(7)
+    with recorded_warnings():  # the fits may reach maxiter here; the misfits are compared all the same
+        model, info, _, _ = ident(w, 1, 2, exct=exact, stable=True)
+        starts = stability.constrained_starts
+        monkeypatch.setattr(stability, "constrained_starts", lambda *args: starts(*args)[:-1])  # the candidates alone
+        _, candidates_only, _, _ = ident(w, 1, 2, exct=exact, stable=True)
+    report = info.stability
+    assert report.rule == "stable=True" and radius(model) <= 1 - 1e-3 < 1.02 < report.unconstrained_radius
+    assert candidates_only.stability.start.endswith(", pulled inside")
+    assert report.start == "the optimum clipped"  # on this record the clipped start leads lower
+    assert info.M < candidates_only.M and info.M > report.unconstrained_misfit
