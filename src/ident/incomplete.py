@@ -175,10 +175,26 @@ def weighted_smoothing(A, B, C, D, series, weights, initial):
 REFINE_TOL = 1e-13  # the refinement's tolerance on theta and on the misfit (relative)
 
 
-def completed(chosen, kinds, series, initial, m: int, ell: int, exponent: int, maxiter: int) -> dict:
-    """What ident keeps of its chosen start when samples are missing: the solver's model (found with
-    small weights on the filled gaps) refined on the exact misfit, the missing samples free. The
-    fields of the attempt to replace: result, candidate and p_ell_condition."""
+def completed(attempts: list, kinds, series, initial, m: int, ell: int, exponent: int, maxiter: int) -> list:
+    """ident's attempts when samples are missing: each start's model (found by the solver with small
+    weights on the filled gaps) refined on the exact misfit, the missing samples free; a refinement
+    that fails leaves the attempt failed, with the reason."""
+    out = []
+    for attempt in attempts:
+        if attempt.candidate.error:
+            out.append(attempt)
+            continue
+        try:
+            out.append(dataclasses.replace(attempt, **refined_attempt(attempt, kinds, series, initial, m, ell,
+                                                                      exponent, maxiter)))
+        except (ValueError, np.linalg.LinAlgError, RuntimeError) as error:
+            out.append(dataclasses.replace(attempt, candidate=dataclasses.replace(
+                attempt.candidate, error=f"the refinement on the missing samples failed: {error}"), exception=error))
+    return out
+
+
+def refined_attempt(chosen, kinds, series, initial, m: int, ell: int, exponent: int, maxiter: int) -> dict:
+    """The fields of an attempt (result, candidate, p_ell_condition) refined on the exact misfit."""
     values, weights = [], []
     for w, v, w0 in zip(series, kinds.weights, initial):
         values.append(w if w0 is None else np.vstack([w0, w]))
