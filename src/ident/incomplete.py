@@ -19,7 +19,7 @@ from ident.smoothing import InfeasibleError, smoothed_misfit
 __all__ = ["kernel_solution", "weighted_misfit", "completed", "variable_weights", "weighted_smoothing"]
 
 RIDGE = 1e-10  # z's regularisation, relative to the mean weight: a missing value no equation fixes is 0
-RIDGE_STEPS = 10  # solves with the ridge centred on the last z: its bias shrinks with each
+RIDGE_STEPS = 4  # solves with the ridge centred on the last z: its bias shrinks with each
 
 
 @dataclasses.dataclass
@@ -32,41 +32,49 @@ class KernelSolution:
 
 
 def kernel_matrix(kernel: np.ndarray, n_samples: int, n_vars: int):
-    """G with G vec(w) = vec(R H_{ell+1}(w)), vec time-major: G[t p + r, t q + c] = R[r, c] (CSC)."""
+    """G with G vec(w) = vec(R H_{ell+1}(w)), vec time-major, G[t p + r, t q + c] = R[r, c], as the
+    rows, columns and values of its nonzeros."""
     p, width = kernel.shape
     n_cols = n_samples - width // n_vars + 1
     rows = np.arange(n_cols)[:, None, None] * p + np.arange(p)[None, :, None] + np.zeros((1, 1, width), int)
     cols = np.arange(n_cols)[:, None, None] * n_vars + np.arange(width)[None, None, :] + np.zeros((1, p, 1), int)
-    data = np.broadcast_to(kernel[None], (n_cols, p, width))
-    return scipy.sparse.csc_matrix((data.ravel(), (rows.ravel(), cols.ravel())), shape=(n_cols * p, n_samples * n_vars))
+    return rows.ravel(), cols.ravel(), np.broadcast_to(kernel[None], (n_cols, p, width)).ravel()
 
 
 def kernel_solution(kernel: np.ndarray, values: np.ndarray, weights: np.ndarray,
                     jacobian: bool = False) -> KernelSolution:
     """min sum v (w - wh)^2 over the free values (0 < v < inf) subject to R H(wh) = 0, missing values
-    (v = 0) free and exact ones (v = inf) kept: the augmented system in (Delta, z, lambda) of the text."""
+    (v = 0) free and exact ones (v = inf) kept: the augmented system in (Delta, z, lambda) of the text,
+    its unknowns in time order (banded), factorised once."""
     p, width = kernel.shape
     n_samples, n_vars = values.shape
     ell = width // n_vars - 1
     n_lambda = (n_samples - ell) * p
     flat_w, flat_v = values.ravel(), weights.ravel()
     free = np.flatnonzero((flat_v > 0) & np.isfinite(flat_v))
-    exact = np.flatnonzero(np.isinf(flat_v))
     missing = np.flatnonzero(flat_v == 0)
-    G = kernel_matrix(kernel, n_samples, n_vars)
-    G_F, G_M = G[:, free], G[:, missing]
-    r0 = G_F @ flat_w[free] + (G[:, exact] @ flat_w[exact] if exact.size else 0.0)
-    ridge = RIDGE * (float(np.mean(flat_v[free])) if free.size else 1.0)
-    system = scipy.sparse.bmat([[scipy.sparse.diags(flat_v[free]), None, -G_F.T],
-                                [None, ridge * scipy.sparse.identity(missing.size), G_M.T],
-                                [G_F, -G_M, None]])
-    keys = np.r_[2 * (free // n_vars), 2 * (missing // n_vars), 2 * (np.arange(n_lambda) // p) + ell]  # time order
-    order = np.argsort(keys, kind="stable")
-    lu = scipy.sparse.linalg.splu(system.tocsr()[order][:, order].tocsc(), permc_spec="NATURAL")
     n_free, n_missing = free.size, missing.size
-    b, x = np.r_[np.zeros(n_free + n_missing), r0], np.empty(n_free + n_missing + n_lambda)
+    rows, cols, data = kernel_matrix(kernel, n_samples, n_vars)
+    r0 = np.bincount(rows, data * np.where(flat_v == 0, 0.0, flat_w)[cols], minlength=n_lambda)
+    position = np.full(flat_w.size, -1)
+    position[free], position[missing] = np.arange(n_free), n_free + np.arange(n_missing)
+    at, lam_at = position[cols], n_free + n_missing + rows
+    inside = at >= 0
+    at, lam_at, signed = at[inside], lam_at[inside], np.where(at[inside] < n_free, 1.0, -1.0) * data[inside]
+    ridge = RIDGE * (float(np.mean(flat_v[free])) if n_free else 1.0)
+    size = n_free + n_missing + n_lambda
+    keys = np.r_[2 * (free // n_vars), 2 * (missing // n_vars), 2 * (np.arange(n_lambda) // p) + ell]
+    order = np.argsort(keys, kind="stable")  # the unknowns in time order: the matrix is banded
+    rank = np.empty(size, int)
+    rank[order] = np.arange(size)  # each unknown's place in that order
+    diagonal = np.arange(n_free + n_missing)
+    entries = (np.r_[lam_at, at, diagonal], np.r_[at, lam_at, diagonal],
+               np.r_[signed, -signed, flat_v[free], np.full(n_missing, ridge)])
+    matrix = scipy.sparse.csc_matrix((entries[2], (rank[entries[0]], rank[entries[1]])), shape=(size, size))
+    lu = scipy.sparse.linalg.splu(matrix, permc_spec="NATURAL")
+    b = np.r_[np.zeros(n_free + n_missing), r0]
     for _ in range(RIDGE_STEPS):  # the ridge centred on the last z: its bias shrinks with each solve
-        x[order] = lu.solve(b[order])
+        x = lu.solve(b[order])[rank]
         b[n_free:n_free + n_missing] = ridge * x[n_free:n_free + n_missing]
     correction, z, lam = x[:n_free], x[n_free:n_free + n_missing], x[n_free + n_missing:]
     wh = flat_w.copy()
@@ -74,11 +82,11 @@ def kernel_solution(kernel: np.ndarray, values: np.ndarray, weights: np.ndarray,
     wh[missing] = z
     solution = KernelSolution(np.sqrt(flat_v[free]) * correction, wh.reshape(n_samples, n_vars))
     if jacobian:
-        solution.jacobian = kernel_jacobian(kernel, lam, wh, flat_v[free], free, missing, lu, order, n_vars)
+        solution.jacobian = kernel_jacobian(kernel, lam, wh, flat_v[free], free, missing, lu, rank, n_vars)
     return solution
 
 
-def kernel_jacobian(kernel, lam, wh, free_weights, free, missing, lu, order, n_vars: int) -> np.ndarray:
+def kernel_jacobian(kernel, lam, wh, free_weights, free, missing, lu, rank, n_vars: int) -> np.ndarray:
     """d residuals / d R[a, c] for the free columns c of the chart, from one solve per parameter with
     the factorisation of the augmented system (see the text)."""
     p, width = kernel.shape
@@ -92,8 +100,7 @@ def kernel_jacobian(kernel, lam, wh, free_weights, free, missing, lu, order, n_v
         dGw[:, a, a, :] = wh[where]
     dGtL = dGtL.reshape(wh.size, p * n_free_cols)
     rhs = np.vstack([dGtL[free], -dGtL[missing], dGw.reshape(n_cols * p, p * n_free_cols)])
-    d = np.empty_like(rhs)
-    d[order] = lu.solve(np.ascontiguousarray(rhs[order]))
+    d = lu.solve(np.ascontiguousarray(rhs[np.argsort(rank)]))[rank]
     return np.sqrt(free_weights)[:, None] * d[:free.size]
 
 
@@ -126,7 +133,7 @@ def refined_kernel(kernel0, values: list, weights: list, maxiter: int, tol: floa
     result = scipy.optimize.least_squares(
         lambda theta: np.concatenate([s.residuals for s in solutions(theta)]), theta0,
         jac=lambda theta: np.vstack([s.jacobian for s in solutions(theta)]), method="lm",
-        xtol=tol, ftol=tol, gtol=tol, max_nfev=max(maxiter, 1) * (theta0.size + 1))
+        xtol=tol, ftol=tol, gtol=tol, max_nfev=max(maxiter, 1))
     return np.hstack([result.x.reshape(p, -1), -np.eye(p)]), result
 
 
@@ -144,38 +151,42 @@ def final_approximation(kernel, model, series, series_weights, initial, values, 
     return weighted_misfit(kernel, values, weights)
 
 
-POLISH_BUDGET = 2_000_000  # samples x (parameters + 1): the polish's cost in smoothed samples per step
+POLISH_STEPS = 8  # Gauss-Newton steps of the polish at most
 
 
-def polished(kernel, series, weights, initial, m: int, ell: int, maxiter: int):
-    """The kernel moved by Gauss-Newton (MINPACK, forward differences) on the residuals of misfit's
-    smoother, where each variable has one weight and the data are small enough: the saddle-point
-    system sees the kernel's residual R H(w), which amplifies rounding where a combination of gaps
-    is nearly a trajectory; the smoother does not. Kept only if its misfit is smaller."""
-    p = kernel.shape[0]
-    n_theta = p * (kernel.shape[1] - p)
-    if variable_weights(weights) is None or sum(len(w) for w in series) * (n_theta + 1) > POLISH_BUDGET:
+def polished(kernel, values, extended_weights, series, weights, initial, m: int, ell: int):
+    """The kernel moved by Gauss-Newton on the residuals of misfit's smoother (12-misfit.md), where each
+    variable has one weight, with the Jacobian of the saddle-point system: that system sees the
+    kernel's residual R H(w), which amplifies rounding where a combination of gaps is nearly a
+    trajectory, and its misfit stalls there at about 1e-14 of the data; the smoother's does not. A step
+    is kept only if the smoother's misfit decreases."""
+    if variable_weights(weights) is None:
         return kernel
+    p = kernel.shape[0]
     kept = [(v > 0) & np.isfinite(v) for v in weights]
 
-    def residuals(theta):
-        candidate = np.hstack([theta.reshape(p, -1), -np.eye(p)])
+    def residuals(candidate):
         try:
             model = kernel_to_ss(normalize_kernel(candidate, m, ell, cond_warn=np.inf), m, ell, cond_warn=np.inf)
             _, trajectories, _ = weighted_smoothing(*(np.asarray(getattr(model, x), dtype=float) for x in "ABCD"),
                                                     series, weights, initial)
         except (ValueError, np.linalg.LinAlgError):
-            return np.full(sum(int(k.sum()) for k in kept), 1e150)
+            return None
         return np.concatenate([(np.sqrt(np.where(k, v, 0.0)) * (w - x))[k]
                                for w, x, v, k in zip(series, trajectories, weights, kept)])
 
-    theta0 = in_chart(kernel)[:, :-p].ravel()
-    start = residuals(theta0)
-    fit = scipy.optimize.least_squares(residuals, theta0, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15,
-                                       max_nfev=max(maxiter, 1) * (n_theta + 1))
-    if not np.sum(fit.fun ** 2) < np.sum(start ** 2):
-        return kernel
-    return np.hstack([fit.x.reshape(p, -1), -np.eye(p)])
+    kernel = in_chart(kernel)
+    current = residuals(kernel)
+    for _ in range(POLISH_STEPS if current is not None else 0):
+        jacobian = np.vstack([kernel_solution(kernel, w, v, jacobian=True).jacobian
+                              for w, v in zip(values, extended_weights)])
+        step = np.linalg.lstsq(jacobian, current, rcond=None)[0]
+        candidate = kernel - np.hstack([step.reshape(p, -1), np.zeros((p, p))])
+        found = residuals(candidate)
+        if found is None or not np.sum(found ** 2) < np.sum(current ** 2):
+            break
+        kernel, current = candidate, found
+    return kernel
 
 
 def variable_weights(weights: list) -> np.ndarray | None:
@@ -205,17 +216,21 @@ def weighted_smoothing(A, B, C, D, series, weights, initial):
     return result.misfit, [x / scale for x in result.trajectories], result
 
 
-REFINE_TOL = 1e-13  # the refinement's tolerance on theta and on the misfit (relative)
+REFINE_TOL = 1e-10  # the refinement's tolerance on theta and on the misfit (relative): the polish goes on
+
+
+FIRST_PASS = 20  # evaluations of each start's refinement: one that needs more is wandering to another minimum
 
 
 def completed(attempts: list, kinds, series, initial, m: int, ell: int, exponent: int, maxiter: int) -> list:
     """ident's attempts when samples are missing: each start's model (found by the solver with small
     weights on the filled gaps) refined on the exact misfit, the missing samples free; a refinement
-    that fails leaves the attempt failed, with the reason."""
+    that fails leaves the attempt failed, with the reason. Every start gets FIRST_PASS evaluations; the
+    one ident will keep is continued with up to maxiter and polished."""
     out = []
     for attempt in attempts:
         out.append(attempt if attempt.candidate.error else refined_or_failed(
-            attempt, kinds, series, initial, m, ell, exponent, maxiter))
+            attempt, kinds, series, initial, m, ell, exponent, min(maxiter, FIRST_PASS)))
     working = [a for a in out if not a.candidate.error]
     if working:  # the one ident will keep (the least misfit, stable first) polished on the smoother
         best = min(working, key=lambda a: (not a.candidate.stable, a.result.misfit))
@@ -245,7 +260,7 @@ def refined_attempt(chosen, kinds, series, initial, m: int, ell: int, exponent: 
     values = [np.where(v == 0, 0.0, w) for w, v in zip(values, weights)]
     kernel, fit = refined_kernel(chosen.result.R, values, weights, maxiter, REFINE_TOL)
     if polish:
-        kernel = polished(kernel, series, kinds.weights, initial, m, ell, maxiter)
+        kernel = polished(kernel, values, weights, series, kinds.weights, initial, m, ell)
     n_vars = series[0].shape[1]
     rows = np.linalg.qr(kernel.T)[0].T
     distance = np.linalg.svd(rows[:, ell * n_vars + m:], compute_uv=False)[-1]
