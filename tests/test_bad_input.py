@@ -458,6 +458,12 @@ CASES += [
      ValueError, "ident: weights='std' needs every variable to vary, but variable 2 is constant"),
     ('weights with offset', lambda: ident(W, 1, 1, weights="std", offset=True),
      ValueError, 'ident: offset=True is not available with missing samples or weights'),
+    ('compare with a missing sample', lambda: compare(W_WITH_NAN, SYS),
+     ValueError, 'compare: w holds 1 non-finite value.*first at sample 2, variable 1; missing values \\(NaN\\) are taken by ident and misfit'),
+    ('resid with a missing sample', lambda: resid(W_WITH_NAN, SYS),
+     ValueError, 'resid: w holds 1 non-finite value.*first at sample 2, variable 1'),
+    ('choose_lag with a missing held-out sample', lambda: choose_lag(np.where(np.arange(180).reshape(60, 3) == 170, np.nan, W), 1, [1]),
+     ValueError, 'choose_lag: w has missing values \\(NaN\\) in its held-out part, from sample 42'),
 ]
 
 @pytest.mark.parametrize("name, call, error, words", CASES, ids=[c[0] for c in CASES])
