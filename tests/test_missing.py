@@ -179,3 +179,28 @@ def test_given_initial_samples_with_missing_data() -> None:
     determined = determined_gaps(data[2:], system, w[2:], wini=w[:2])
     assert determined.sum() >= 0.9 * np.isnan(data[2:]).sum()
     assert np.abs(wh - w[2:])[determined | ~np.isnan(data[2:])].max() <= 1e-8 * np.abs(w).max()
+
+
+@pytest.mark.parametrize("kind", ["per sample", "per variable", "with wini"])
+def test_misfit_with_weights_is_the_misfit_ident_reports(kind) -> None:
+    rng = np.random.default_rng(19)
+    system = random_system(1, 1, 2, rng)
+    (w,) = exact_series(system, [50], rng)
+    noisy = w + 0.05 * rng.standard_normal(w.shape)
+    weights = rng.uniform(0.5, 2.0, w.shape)
+    weights[rng.random(w.shape) < 0.2] = 0.0
+    wini = None
+    if kind == "per variable":
+        weights = np.array([1.0, 4.0])
+        noisy[3, 1] = np.nan
+    elif kind == "with wini":
+        noisy, weights, wini = noisy[2:], weights[2:], w[:2]
+    given = (noisy.copy(), np.array(weights, copy=True))
+    sysh, info, wh, xini = ident(noisy, 1, 2, weights=weights, wini=wini)
+    M, wh_misfit, xini_misfit = misfit(noisy, sysh, weights=weights, wini=wini)
+    assert info.M == pytest.approx(M, rel=1e-10)
+    size = np.nanmax(np.abs(noisy))
+    np.testing.assert_allclose(wh, wh_misfit, atol=1e-10 * size)
+    np.testing.assert_allclose(xini, xini_misfit, atol=1e-8 * size)
+    np.testing.assert_array_equal(noisy, given[0])
+    np.testing.assert_array_equal(weights, given[1])

@@ -10,7 +10,7 @@ import numpy as np
 
 from ident.data_forms import DataForm, as_array, holds_real_numbers
 
-__all__ = ["SampleKinds", "sample_kinds"]
+__all__ = ["SampleKinds", "sample_kinds", "sample_weights"]
 
 START_WEIGHT = 1e-6  # a missing sample's weight in the solver's start, relative to the smallest weight
 
@@ -56,6 +56,20 @@ def sample_kinds(series, weights, exact, form: DataForm, m: int, ell: int, initi
     """The weights of every sample from w's NaN, the exact variables and `weights` (None, "std", a
     vector of q weights or an array of w's shape, columns as the caller gave them); refused with an
     error naming the argument where they contradict each other or leave too little data."""
+    kinds = SampleKinds(out := sample_weights(series, weights, exact, form, who),
+                        [filled(w, v == 0) for w, v in zip(series, out)])
+    if kinds.incomplete:
+        check_enough_samples(kinds, m, ell, initial, who)
+    if not kinds.plain and (affine or reduced):
+        raise ValueError(f"{who}: {'offset=True' if affine else 'n (a reduced order)'} is not available with "
+                         "missing samples or weights; centre the data yourself, or reduce the model afterwards "
+                         "with balanced_truncation")
+    return kinds
+
+
+def sample_weights(series, weights, exact, form: DataForm, who: str) -> list:
+    """The weight of every sample (variables in the model's order): the caller's weights, 0 where w is
+    NaN, inf in the exact variables; checked as `sample_kinds` says."""
     n_vars = series[0].shape[1]
     given = given_weights(series, weights, form, who)
     out = []
@@ -79,14 +93,7 @@ def sample_kinds(series, weights, exact, form: DataForm, m: int, ell: int, initi
         if observed[j] == 0:
             raise ValueError(f"{who}: variable {variable_text(form, j)} of w is missing in every sample (NaN or "
                              "weight 0): nothing identifies its part of the model; leave it out of w")
-    kinds = SampleKinds(out, [filled(w, v == 0) for w, v in zip(series, out)])
-    if kinds.incomplete:
-        check_enough_samples(kinds, m, ell, initial, who)
-    if not kinds.plain and (affine or reduced):
-        raise ValueError(f"{who}: {'offset=True' if affine else 'n (a reduced order)'} is not available with "
-                         "missing samples or weights; centre the data yourself, or reduce the model afterwards "
-                         "with balanced_truncation")
-    return kinds
+    return out
 
 
 def check_enough_samples(kinds: SampleKinds, m: int, ell: int, initial, who: str) -> None:
