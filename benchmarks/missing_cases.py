@@ -75,13 +75,14 @@ def random_missing_case(seed: int, noise: float) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "missing_cases.json"))
-    parser.add_argument("--runs", type=int, default=100)
+    parser.add_argument("--runs", type=int, default=100, help="systems of the periodic case")
+    parser.add_argument("--carlo-runs", type=int, default=100, help="runs of the Monte Carlo at each noise level")
     args = parser.parse_args()
     started = time.perf_counter()
     periodic = [periodic_case(seed) for seed in range(args.runs)]
     monte_carlo = [random_missing_case(1000 + seed, noise) for noise in (0.01, 0.05, 0.2)
-                   for seed in range(args.runs)]
-    record = {"runs": args.runs, "periodic": periodic, "random_missing": monte_carlo,
+                   for seed in range(args.carlo_runs)]
+    record = {"runs": args.runs, "carlo_runs": args.carlo_runs, "periodic": periodic, "random_missing": monte_carlo,
               "seconds": time.perf_counter() - started}
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(record, indent=1) + "\n")

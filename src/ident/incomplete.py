@@ -154,6 +154,7 @@ def final_approximation(kernel, model, series, series_weights, initial, values, 
 
 
 POLISH_STEPS = 8  # Gauss-Newton steps of the polish at most
+POLISH_SAMPLES = 20_000  # the polish runs on data of at most this many samples (the smoother's cost, 12-misfit.md)
 
 
 def polished(kernel, values, extended_weights, series, weights, initial, m: int, ell: int):
@@ -162,7 +163,7 @@ def polished(kernel, values, extended_weights, series, weights, initial, m: int,
     kernel's residual R H(w), which amplifies rounding where a combination of gaps is nearly a
     trajectory, and its misfit stalls there at about 1e-14 of the data; the smoother's does not. A step
     is kept only if the smoother's misfit decreases."""
-    if variable_weights(weights) is None:
+    if variable_weights(weights) is None or sum(len(w) for w in series) > POLISH_SAMPLES:
         return kernel
     p = kernel.shape[0]
     kept = [(v > 0) & np.isfinite(v) for v in weights]
