@@ -65,7 +65,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "bench_missing.json"))
     parser.add_argument("--samples", type=int, default=100_000)
-    parser.add_argument("--memory-sizes", type=int, nargs="*", default=[100_000, 300_000, 1_000_000])
+    parser.add_argument("--memory-sizes", type=int, nargs="*", default=[20_000, 100_000, 1_000_000])
     args = parser.parse_args()
     model, w, rng = noisy_data(args.samples)
     half = with_gaps(w, 0.5, rng)
