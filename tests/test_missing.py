@@ -204,3 +204,17 @@ def test_misfit_with_weights_is_the_misfit_ident_reports(kind) -> None:
     np.testing.assert_allclose(xini, xini_misfit, atol=1e-8 * size)
     np.testing.assert_array_equal(noisy, given[0])
     np.testing.assert_array_equal(weights, given[1])
+
+
+def test_weights_follow_a_data_frames_columns() -> None:
+    pd = pytest.importorskip("pandas")
+    rng = np.random.default_rng(20)
+    system = random_system(1, 2, 1, rng)
+    (w,) = exact_series(system, [200], rng)
+    w = w + 0.1 * rng.standard_normal(w.shape)
+    w[5, 1] = np.nan
+    frame = pd.DataFrame(w[:, [1, 0, 2]], columns=["y1", "u", "y2"])  # the input second
+    by_array = ident(w, 1, 1, weights=[1.0, 2.0, 3.0])[1].M
+    by_vector = ident(frame, ell=1, inputs=["u"], weights=[2.0, 1.0, 3.0])[1].M  # in the frame's order
+    by_samples = ident(frame, ell=1, inputs=["u"], weights=np.ones((200, 3)) * [2.0, 1.0, 3.0])[1].M
+    assert by_vector == pytest.approx(by_array, rel=1e-10) and by_samples == pytest.approx(by_array, rel=1e-10)
