@@ -11,7 +11,8 @@ against the 2 T + n degrees of freedom of a trajectory: ident refuses them), so 
 with half of the output values missing, and the evaluation is timed on both patterns;
 misfit() at 10 % missing against the complete data (the smoother of 12-misfit.md) and the
 saddle-point evaluation of 26-missing-data.md at 10 % missing; and the peak memory of ident at
-10 % missing for growing T, each in a fresh process. literate/26-missing-data.md reads the JSON.
+10 % missing for growing T, and of one evaluation of the refinement (T = 1e5 and 1e6), each in a
+fresh process. literate/26-missing-data.md reads the JSON.
 Timings depend on the machine and its load; compare the ratios measured in one run.
 """
 from __future__ import annotations
@@ -61,12 +62,34 @@ def peak_memory(n_samples: int) -> dict:
     return {"T": n_samples, "seconds": float(out[0]), "peak_MiB": float(out[1])}
 
 
+def evaluation_memory(n_samples: int) -> dict:
+    """One evaluation of the exact misfit with its Jacobian (an iteration of the refinement) at 10 %
+    missing, in a fresh process: its peak resident memory (MiB) and time."""
+    code = ("import resource, time, numpy as np, sys; sys.path.insert(0, %r); import bench_missing as b; "
+            "from ident.incomplete import in_chart, kernel_solution; from ident.representations import ss_to_kernel; "
+            "model, w, rng = b.noisy_data(%d); w = b.with_gaps(w, 0.1, rng); kernel = in_chart(ss_to_kernel(model, 2)); "
+            "s = time.perf_counter(); kernel_solution(kernel, np.nan_to_num(w), np.where(np.isnan(w), 0.0, 1.0), "
+            "jacobian=True); print(time.perf_counter() - s, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)"
+            % (str(Path(__file__).parent), n_samples))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    return {"T": n_samples, "seconds": float(out[0]), "peak_MiB": float(out[1])}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "bench_missing.json"))
     parser.add_argument("--samples", type=int, default=100_000)
-    parser.add_argument("--memory-sizes", type=int, nargs="*", default=[20_000, 100_000, 1_000_000])
+    parser.add_argument("--memory-sizes", type=int, nargs="*", default=[20_000, 100_000])
+    parser.add_argument("--evaluation-sizes", type=int, nargs="*", default=[100_000, 1_000_000])
+    parser.add_argument("--only-evaluation-memory", action="store_true",
+                        help="measure only the evaluations' memory and add it to the existing results file")
     args = parser.parse_args()
+    if args.only_evaluation_memory:
+        record = json.loads(Path(args.out).read_text())
+        record["evaluation_memory"] = [evaluation_memory(size) for size in args.evaluation_sizes]
+        Path(args.out).write_text(json.dumps(record, indent=1) + "\n")
+        print(json.dumps(record["evaluation_memory"], indent=1))
+        return
     model, w, rng = noisy_data(args.samples)
     half = with_gaps(w, 0.5, rng)
     half_outputs = np.hstack([w[:, :2], with_gaps(w[:, 2:], 0.5, rng)])
@@ -97,6 +120,7 @@ def main() -> None:
                         "saddle_point_missing_10": saddle, "saddle_point_ratio": saddle / complete_misfit,
                         "relative_difference": abs(M - M_saddle) / M}
     record["memory"] = [peak_memory(size) for size in args.memory_sizes]
+    record["evaluation_memory"] = [evaluation_memory(size) for size in args.evaluation_sizes]
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(record, indent=1) + "\n")
     print(json.dumps(record, indent=1))
