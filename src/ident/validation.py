@@ -55,7 +55,7 @@ def split_for_validation(u, y, holdout: float = 0.3, *, centre: bool = True) -> 
         raise ValueError(f"holdout must be a fraction in [0, 1), got {holdout!r}")
     u, y = np.asarray(u, dtype=float), np.asarray(y, dtype=float)
     w = np.hstack([u, y])
-    means = w.mean(axis=0) if centre else np.zeros(w.shape[1])
+    means = (np.nanmean(w, axis=0) if np.isnan(w).any() else w.mean(axis=0)) if centre else np.zeros(w.shape[1])
     w = w - means
     n_identification = math.ceil((1 - holdout) * len(w))
     return ValidationSplit(w[:n_identification], w[n_identification:], means[: u.shape[1]], means[u.shape[1]:])
