@@ -218,3 +218,15 @@ def test_weights_follow_a_data_frames_columns() -> None:
     by_vector = ident(frame, ell=1, inputs=["u"], weights=[2.0, 1.0, 3.0])[1].M  # in the frame's order
     by_samples = ident(frame, ell=1, inputs=["u"], weights=np.ones((200, 3)) * [2.0, 1.0, 3.0])[1].M
     assert by_vector == pytest.approx(by_array, rel=1e-10) and by_samples == pytest.approx(by_array, rel=1e-10)
+
+
+def test_positive_weights_per_sample_go_to_the_solver_and_agree_with_the_brute_force() -> None:
+    rng = np.random.default_rng(21)
+    system = random_system(1, 1, 2, rng)
+    (w,) = exact_series(system, [50], rng)
+    noisy = w + 0.05 * rng.standard_normal(w.shape)
+    weights = rng.uniform(0.5, 2.0, w.shape)  # no zero: the solver of the complete case, no refinement
+    sysh, info, wh, _ = ident(noisy, 1, 2, weights=weights)
+    assert "refined on the missing samples" not in info.message
+    assert info.M == pytest.approx(dense_weighted_misfit(sysh, noisy, weights), rel=1e-8)
+    assert info.M == pytest.approx(misfit(noisy, sysh, weights=weights)[0], rel=1e-10)
