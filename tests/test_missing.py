@@ -230,3 +230,16 @@ def test_positive_weights_per_sample_go_to_the_solver_and_agree_with_the_brute_f
     assert "refined on the missing samples" not in info.message
     assert info.M == pytest.approx(dense_weighted_misfit(sysh, noisy, weights), rel=1e-8)
     assert info.M == pytest.approx(misfit(noisy, sysh, weights=weights)[0], rel=1e-10)
+
+
+def test_auto_weights_are_raw_or_std_by_the_hold_out() -> None:
+    from ident import compare
+    rng = np.random.default_rng(30)
+    system = random_system(1, 2, 1, rng)
+    (w,) = exact_series(system, [300], rng)
+    w = (w + 0.1 * rng.standard_normal(w.shape)) * [1.0, 1.0, 80.0]  # one output in other units
+    split = 210  # ceil(0.7 T): the first 70 % identify, the last 30 % judge
+    fits = {choice: np.mean(compare(w[split:], ident(w[:split], 1, 1, weights=choice)[0]).fit)
+            for choice in (None, "std")}
+    expected = "std" if fits["std"] > fits[None] else None
+    assert ident(w, 1, 1, weights="auto")[1].M == pytest.approx(ident(w, 1, 1, weights=expected)[1].M, rel=1e-12)
