@@ -77,8 +77,17 @@ def main() -> None:
     parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "missing_cases.json"))
     parser.add_argument("--runs", type=int, default=100, help="systems of the periodic case")
     parser.add_argument("--carlo-runs", type=int, default=100, help="runs of the Monte Carlo at each noise level")
+    parser.add_argument("--carlo-only", action="store_true",
+                        help="run only the Monte Carlo and replace it in the existing results file")
     args = parser.parse_args()
     started = time.perf_counter()
+    if args.carlo_only:
+        record = json.loads(Path(args.out).read_text())
+        record["random_missing"] = [random_missing_case(1000 + seed, noise) for noise in (0.01, 0.05, 0.2)
+                                    for seed in range(args.carlo_runs)]
+        record["carlo_runs"], record["carlo_seconds"] = args.carlo_runs, time.perf_counter() - started
+        Path(args.out).write_text(json.dumps(record, indent=1) + "\n")
+        return
     periodic = [periodic_case(seed) for seed in range(args.runs)]
     monte_carlo = [random_missing_case(1000 + seed, noise) for noise in (0.01, 0.05, 0.2)
                    for seed in range(args.carlo_runs)]
