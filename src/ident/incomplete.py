@@ -9,9 +9,6 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-import scipy.optimize
-import scipy.sparse
-import scipy.sparse.linalg
 
 from ident.representations import (inistate, kernel_to_ss, make_ss, normalize_kernel, observability_index,
                                    shared_inistate, simulate, ss_to_kernel)
@@ -48,6 +45,7 @@ def kernel_solution(kernel: np.ndarray, values: np.ndarray, weights: np.ndarray,
     """min sum v (w - wh)^2 over the free values (0 < v < inf) subject to R H(wh) = 0, missing values
     (v = 0) free and exact ones (v = inf) kept: the augmented system in (Delta, z, lambda) of the text,
     its unknowns in time order (banded), factorised once."""
+    import scipy.sparse.linalg  # on first use: import ident stays as quick as numpy and scipy.linalg
     p, width = kernel.shape
     n_samples, n_vars = values.shape
     ell = width // n_vars - 1
@@ -120,6 +118,7 @@ def weighted_misfit(kernel, values: list, weights: list):
 
 def refined_kernel(kernel0, values: list, weights: list, maxiter: int, tol: float):
     """Levenberg-Marquardt on theta = R[:, :-p] (R[:, -p:] = -I) from kernel0: (R, result)."""
+    import scipy.optimize  # on first use, as scipy.sparse
     p = kernel0.shape[0]
     theta0 = in_chart(kernel0)[:, :-p].ravel()
     last = {}
