@@ -273,22 +273,39 @@ def test_an_npy_file_is_read(tmp_path, capsys, monkeypatch):
     assert status == 0 and "identified from 140 samples" in out, err
 
 
-def test_nan_is_reported_in_the_files_terms_before_centring(data_csv, tmp_path, capsys):
+def test_inf_is_reported_in_the_files_terms_before_centring(data_csv, tmp_path, capsys):
     lines = data_csv.read_text().splitlines()
     fields = lines[100].split(",")  # line 101 of the file: the header, then data row 100
-    lines[100] = ",".join(fields[:2] + ["nan"])
+    lines[100] = ",".join(fields[:2] + ["inf"])  # NaN is a missing sample, which identify takes
     data_csv.write_text("\n".join(lines) + "\n")
     refused(["identify", data_csv, "--inputs", "u1,u2", "--outputs", "y", "--lag", 1], capsys,
             f"column 'y' holds 1 missing value(s) (NaN or inf), the first in data row 100 (line 101 of {data_csv})",
             tmp_path)
 
 
-def test_nan_in_an_npz_array(tmp_path, capsys):
+def test_inf_in_an_npz_array(tmp_path, capsys):
     y = np.ones(200)
-    y[99] = np.nan
+    y[99] = np.inf
     refused(["identify", npz_data(tmp_path, y=y), "--lag", 1], capsys,
             "column 'y[:, 0]' holds 1 missing value(s) (NaN or inf), the first in sample 99 (0-based) of array 'y'",
             tmp_path)
+
+
+def test_empty_fields_and_nan_are_missing_samples(data_csv, tmp_path, capsys):
+    """identify reads an empty CSV field or NaN as a missing sample (issue 29, 26-missing-data.md) where
+    the model is identified; where it is validated by simulation, it refuses them, naming the row."""
+    lines = data_csv.read_text().splitlines()
+    lines[51] = ",".join(lines[51].split(",")[:2] + [""])  # data row 50: y empty
+    lines[81] = "nan," + ",".join(lines[81].split(",")[1:])  # data row 80: u1 NaN
+    data_csv.write_text("\n".join(lines) + "\n")
+    status, out, err = run(["identify", data_csv, "--inputs", "u1,u2", "--outputs", "y", "--lag", 2,
+                            "--model", tmp_path / "model.json", "--plot", tmp_path / "fit.png"], capsys)
+    assert status == 0 and "identified from 210 samples" in out and "refined on the missing samples" in out, err
+    lines[251] = ",".join(lines[251].split(",")[:2] + [""])  # data row 250: in the held-out part
+    data_csv.write_text("\n".join(lines) + "\n")
+    refused(["identify", data_csv, "--inputs", "u1,u2", "--outputs", "y", "--lag", 2, "--model", tmp_path / "m2.json",
+             "--plot", tmp_path / "fit2.png"],
+            capsys, "missing values (empty or NaN) in the samples the model is validated on, from data row 210", tmp_path)
 
 
 def test_a_constant_input_is_refused_with_its_name(data_csv, tmp_path, capsys):

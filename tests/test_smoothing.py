@@ -306,11 +306,12 @@ def test_exact_output_behind_unstable_zero_dynamics(monkeypatch) -> None:
     assert M_unprojected == M
 
 
-def test_ident_refuses_missing_values_and_points_at_misfit() -> None:
+def test_ident_takes_missing_values_and_its_misfit_is_misfits() -> None:
+    """Since issue 29 ident takes NaN as a missing sample (26-missing-data.md): same misfit as misfit()."""
     w = np.random.default_rng(17).standard_normal((50, 2))
     w[10, 1] = np.nan
-    with pytest.raises(ValueError, match="misfit\\(w, sysh\\) does"):
-        ident(w, 1, 1)
+    sysh, info, wh, _ = ident(w, 1, 1)
+    assert info.M == pytest.approx(misfit(w, sysh)[0], rel=1e-10) and np.all(np.isfinite(wh))
 
 
 def test_misfit_equals_info_M_for_ident_models() -> None:

@@ -149,13 +149,22 @@ def with_missing(frame):
      r"w\[1\] has the columns \['position', 'speed'\] but w\[0\] has \['force', 'position'\]: w\[1\] lacks "
      r"'force'; w\[1\] has 'speed', not expected"),
     (lambda w: [frame_of(w), w], TypeError, r"w\[1\] is a ndarray, but w holds DataFrames"),
-    (lambda w: with_missing(frame_of(w).astype({"position": "Float64"})), ValueError,
-     r"w holds 1 non-finite value\(s\) \(NaN or inf, or masked\), the first at sample 5, variable 1"),
 ])
 def test_bad_data_frames_are_refused_by_name(data, error, words) -> None:
     _, w = noisy_data(T=60)
     with pytest.raises(error, match=words):
         ident(data(w), 1, 2)
+
+
+def test_pandas_missing_values_are_missing_samples() -> None:
+    """pd.NA in a nullable column is a missing sample, as NaN is (issue 29): taken, and refused only in an
+    exact variable, by its name and first sample."""
+    _, w = noisy_data(T=60)
+    frame = with_missing(frame_of(w).astype({"position": "Float64"}))
+    with_nan = np.where(np.arange(w.size).reshape(w.shape) == 5 * 2 + 1, np.nan, w)  # sample 5 (index 15), variable 1
+    assert ident(frame, 1, 2)[1].M == pytest.approx(ident(with_nan, 1, 2)[1].M, rel=1e-9)
+    with pytest.raises(ValueError, match=r"variable 'position' is exact \(exct\) but is missing .* at sample 5"):
+        ident(frame, 1, 2, exct=["position"])
 
 
 def test_exct_naming_a_column_that_does_not_exist_is_refused() -> None:

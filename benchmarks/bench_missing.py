@@ -1,0 +1,130 @@
+"""Cost of identification with missing samples against the complete case, in one run (issue 29, point 5).
+
+    python benchmarks/bench_missing.py [--out benchmarks/results/bench_missing.json] [--memory-sizes 100000 300000 1000000]
+
+A two-input two-output model of lag 2 (n = 4) on noisy data (errors-in-variables, noise 0.1),
+T = 1e5: ident on the complete data and on the data with 50 % of the values missing at random
+(the time per iteration: the solver's for the complete data, one evaluation of the exact misfit
+with its Jacobian, which is what an iteration of the refinement costs, for the missing data). With
+half of all values missing, errors-in-variables data do not determine a model (2 T observed values
+against the 2 T + n degrees of freedom of a trajectory: ident refuses them), so ident runs on data
+with half of the output values missing, and the evaluation is timed on both patterns;
+misfit() at 10 % missing against the complete data (the smoother of 12-misfit.md) and the
+saddle-point evaluation of 26-missing-data.md at 10 % missing; and the peak memory of ident at
+10 % missing for growing T, and of one evaluation of the refinement (T = 1e5 and 1e6), each in a
+fresh process. literate/26-missing-data.md reads the JSON.
+Timings depend on the machine and its load; compare the ratios measured in one run.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ident import ident, misfit
+from ident.incomplete import in_chart, kernel_solution, weighted_misfit
+from ident.representations import random_system, simulate, ss_to_kernel
+
+
+def timed(call):
+    start = time.perf_counter()
+    value = call()
+    return time.perf_counter() - start, value
+
+
+def noisy_data(n_samples: int, seed: int = 0):
+    rng = np.random.default_rng(seed)
+    model = random_system(2, 2, 2, rng)
+    u = rng.standard_normal((n_samples, 2))
+    w = np.hstack([u, simulate(model, u, rng.standard_normal(model.nstates))])
+    return model, w + 0.1 * rng.standard_normal(w.shape), rng
+
+
+def with_gaps(w, fraction: float, rng) -> np.ndarray:
+    return np.where(rng.random(w.shape) < fraction, np.nan, w)
+
+
+def peak_memory(n_samples: int) -> dict:
+    """ident at 10 % missing in a fresh process: its peak resident memory (MiB) and time."""
+    code = ("import resource, time, numpy as np, sys; sys.path.insert(0, %r); import bench_missing as b; "
+            "model, w, rng = b.noisy_data(%d); w = b.with_gaps(w, 0.1, rng); "
+            "from ident import ident; s = time.perf_counter(); ident(w, 2, 2, init='lra'); "
+            "print(time.perf_counter() - s, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)"
+            % (str(Path(__file__).parent), n_samples))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    return {"T": n_samples, "seconds": float(out[0]), "peak_MiB": float(out[1])}
+
+
+def evaluation_memory(n_samples: int) -> dict:
+    """One evaluation of the exact misfit with its Jacobian (an iteration of the refinement) at 10 %
+    missing, in a fresh process: its peak resident memory (MiB) and time."""
+    code = ("import resource, time, numpy as np, sys; sys.path.insert(0, %r); import bench_missing as b; "
+            "from ident.incomplete import in_chart, kernel_solution; from ident.representations import ss_to_kernel; "
+            "model, w, rng = b.noisy_data(%d); w = b.with_gaps(w, 0.1, rng); kernel = in_chart(ss_to_kernel(model, 2)); "
+            "s = time.perf_counter(); kernel_solution(kernel, np.nan_to_num(w), np.where(np.isnan(w), 0.0, 1.0), "
+            "jacobian=True); print(time.perf_counter() - s, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)"
+            % (str(Path(__file__).parent), n_samples))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    return {"T": n_samples, "seconds": float(out[0]), "peak_MiB": float(out[1])}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "bench_missing.json"))
+    parser.add_argument("--samples", type=int, default=100_000)
+    parser.add_argument("--memory-sizes", type=int, nargs="*", default=[20_000, 100_000])
+    parser.add_argument("--evaluation-sizes", type=int, nargs="*", default=[100_000, 1_000_000])
+    parser.add_argument("--only-evaluation-memory", action="store_true",
+                        help="measure only the evaluations' memory and add it to the existing results file")
+    args = parser.parse_args()
+    if args.only_evaluation_memory:
+        record = json.loads(Path(args.out).read_text())
+        record["evaluation_memory"] = [evaluation_memory(size) for size in args.evaluation_sizes]
+        Path(args.out).write_text(json.dumps(record, indent=1) + "\n")
+        print(json.dumps(record["evaluation_memory"], indent=1))
+        return
+    model, w, rng = noisy_data(args.samples)
+    half = with_gaps(w, 0.5, rng)
+    half_outputs = np.hstack([w[:, :2], with_gaps(w[:, 2:], 0.5, rng)])
+    tenth = with_gaps(w, 0.1, rng)
+    record = {"T": args.samples, "machine": platform.processor() or platform.machine(), "cpus": os.cpu_count()}
+
+    seconds, (sysh, info, _, _) = timed(lambda: ident(w, 2, 2, init="lra"))
+    record["complete"] = {"seconds": seconds, "iterations": info.iter, "solver_seconds": info.time,
+                          "per_iteration": info.time / max(info.iter, 1)}
+    seconds, (sysh_half, info_half, _, _) = timed(lambda: ident(half_outputs, 2, 2, init="lra"))
+    kernel = in_chart(ss_to_kernel(sysh_half, 2))
+    evaluations = {}
+    for name, data in (("outputs", half_outputs), ("all", half)):
+        values, weights = np.nan_to_num(data), np.where(np.isnan(data), 0.0, 1.0)
+        evaluations[name] = timed(lambda: kernel_solution(kernel, values, weights, jacobian=True))[0]
+    record["missing_50"] = {"seconds": seconds, "iterations": info_half.iter, "message": info_half.message,
+                            "per_iteration": evaluations["outputs"], "per_iteration_all": evaluations["all"]}
+    record["per_iteration_ratio"] = evaluations["outputs"] / record["complete"]["per_iteration"]
+    record["per_iteration_ratio_all"] = evaluations["all"] / record["complete"]["per_iteration"]
+    record["total_ratio"] = record["missing_50"]["seconds"] / record["complete"]["seconds"]
+
+    complete_misfit, _ = timed(lambda: misfit(w, sysh))
+    gappy_misfit, (M, _, _) = timed(lambda: misfit(tenth, sysh))
+    kernel = in_chart(ss_to_kernel(sysh, 2))
+    saddle, (M_saddle, _) = timed(lambda: weighted_misfit(kernel, [np.nan_to_num(tenth)],
+                                                          [np.where(np.isnan(tenth), 0.0, 1.0)]))
+    record["misfit"] = {"complete": complete_misfit, "missing_10": gappy_misfit, "ratio": gappy_misfit / complete_misfit,
+                        "saddle_point_missing_10": saddle, "saddle_point_ratio": saddle / complete_misfit,
+                        "relative_difference": abs(M - M_saddle) / M}
+    record["memory"] = [peak_memory(size) for size in args.memory_sizes]
+    record["evaluation_memory"] = [evaluation_memory(size) for size in args.evaluation_sizes]
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.out).write_text(json.dumps(record, indent=1) + "\n")
+    print(json.dumps(record, indent=1))
+
+
+if __name__ == "__main__":
+    main()
