@@ -26,6 +26,8 @@ from literate_tools.xref import Piece, page_name
 # (#666) is barely told from the text, and their spans were another eighth of the pages: unwrapped too,
 # so they take the text's colour.
 UNSTYLED_TOKEN = re.compile(r'<span class="(?:n|p|w|o)">([^<]*)</span>')
+STRING_PART = re.compile(r'<span class="(?:sa|si|s1|se)">')  # drawn as strings (s2): one span per string
+SAME_CLASS_SEAM = re.compile(r'(<span class="([a-z0-9]+)">[^<]*)</span><span class="\2">')
 IMAGE_SUFFIXES = {".png", ".jpg", ".jpeg", ".gif", ".svg", ".webp"}
 TEXT_COLUMNS = 88  # characters of code that fit in the text column (45rem in site.css)
 TEXT_WIDTH_PX = 720  # the text column in CSS pixels; a wider figure widens its example
@@ -236,7 +238,9 @@ class PageRenderer:
             lexer = get_lexer_by_name(language, stripnl=False, ensurenl=True)
         except ClassNotFound:
             lexer = TextLexer(stripnl=False, ensurenl=True)
-        code = UNSTYLED_TOKEN.sub(r"\1", highlight(text, lexer, self.formatter))
+        code = STRING_PART.sub('<span class="s2">', UNSTYLED_TOKEN.sub(r"\1", highlight(text, lexer, self.formatter)))
+        while (merged := SAME_CLASS_SEAM.sub(r"\1", code)) != code:  # adjacent spans of one class: one span
+            code = merged
         return CODE_TEXT.sub(lambda m: m[1] + MENTION.sub(self.code_mention, m[2]) + m[3], code)
 
     def code_mention(self, match: re.Match) -> str:

@@ -599,7 +599,8 @@ class Weave:
         import nbformat
 
         try:
-            notebook = jupytext.reads(self.text_with_values(document.path, marked=False)[0], fmt="md")
+            notebook = jupytext.reads(without_package_code(self.text_with_values(document.path, marked=False)[0]),
+                                      fmt="md")
         except Exception as error:
             self.warn(f"{document.path}: warning: jupytext cannot read it, no notebook: {error}")
             return None
@@ -695,3 +696,22 @@ def check_options(root: Path, out: Path) -> None:
     blocking = next((p for p in out.absolute().parents if os.path.lexists(p) and not p.is_dir()), None)
     if blocking is not None:
         raise OptionError(f"--out {out}: {blocking} is a file, not a folder; name a folder")
+
+
+def without_package_code(text: str) -> str:
+    """The text with the body of each package chunk replaced by one line saying where the code is. A
+    notebook is for running the examples; the package's code is on the woven page and in src/ident,
+    and in the notebooks it was half of the bytes of docs/."""
+    lines, kept, k = text.split("\n"), [], 0
+    while k < len(lines):
+        kept.append(lines[k])
+        fence = chunks.FENCE.match(lines[k])
+        header = chunks.CHUNK_HEADER.match(lines[k + 1]) if fence and k + 1 < len(lines) else None
+        if not header:
+            k += 1
+            continue
+        end = next((j for j in range(k + 2, len(lines)) if lines[j].startswith(fence["fence"])), len(lines))
+        kept += [lines[k + 1], f"# ... {end - k - 2} lines of the package: on the woven page, and tangled into "
+                               "src/ident"]
+        k = end
+    return "\n".join(kept)
