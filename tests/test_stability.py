@@ -131,9 +131,14 @@ def test_the_clipped_start_never_raises_the_constrained_misfit(exact, monkeypatc
         model, info, _, _ = ident(w, 1, 2, exct=exact, stable=True)
         starts = stability.constrained_starts
         monkeypatch.setattr(stability, "constrained_starts", lambda *args: starts(*args)[:-1])  # the candidates alone
-        _, candidates_only, _, _ = ident(w, 1, 2, exct=exact, stable=True)
+        try:
+            _, candidates_only, _, _ = ident(w, 1, 2, exct=exact, stable=True)
+        except ValueError as refused:  # with some BLAS kernels every candidate's fit runs off to a kernel with no model
+            assert "no start led to a model within the bound" in str(refused)
+            candidates_only = None
     report = info.stability
     assert report.rule == "stable=True" and radius(model) <= 1 - 1e-3 < 1.02 < report.unconstrained_radius
-    assert candidates_only.stability.start.endswith(", pulled inside")
     assert report.start == "the optimum clipped"  # on this record the clipped start leads lower
-    assert info.M < candidates_only.M and info.M > report.unconstrained_misfit
+    assert info.M > report.unconstrained_misfit
+    if candidates_only is not None:
+        assert candidates_only.stability.start.endswith(", pulled inside") and info.M < candidates_only.M
