@@ -628,13 +628,18 @@ def test_infeasible_starts_are_reported_in_the_callers_terms(monkeypatch) -> Non
 
 def test_a_nearly_noncausal_model_is_returned_with_warnings_at_the_callers_line() -> None:
     # from the paper's start the kernel is singular (refused above); the other starts of "auto" creep
-    # towards it and stop where P_ell is nearly singular and the model violently unstable: ident says
-    # both, at the caller's line, and the candidates say why the paper's start gave nothing
+    # towards it and stop where P_ell is nearly singular and the model violently unstable, so the
+    # stability-constrained fit runs too (24-uncertainty-and-stability.md): ident says all of it, at the
+    # caller's line (whether that fit reaches maxiter, an SLRAWarning, depends on the BLAS kernels'
+    # rounding), and the candidates say why the paper's start gave nothing
     from ident.identification import UnstableModelWarning
     from ident.representations import IllConditionedWarning
+    from ident.solver import SLRAWarning
     with recorded_warnings() as record:
         _, info, _, _ = ident(noncausal_data(), 1, 1)
-    assert {type(r.message) for r in record} == {UnstableModelWarning, IllConditionedWarning}
+    kinds = {type(r.message) for r in record}
+    assert {UnstableModelWarning, IllConditionedWarning} <= kinds <= {UnstableModelWarning, IllConditionedWarning,
+                                                                     SLRAWarning}
     assert any("no start led to a stable model" in str(r.message) for r in record)
     assert all(r.filename == __file__ for r in record), [r.filename for r in record]
     assert "cannot take the first m = 1 variables of w as its inputs" in info.candidates[0].error
