@@ -12,7 +12,9 @@ Writes benchmarks/results/daisy_workers.json, which 15-many-identifications.md r
 
 Usage: python benchmarks/bench_daisy_workers.py [--rounds=2] [--workers=2]
 """
+import concurrent.futures
 import json
+import multiprocessing
 import os
 import platform
 import sys
@@ -51,6 +53,33 @@ def longest_run(results) -> float:
     return max(mode.seconds for result in results for mode in result.modes.values())
 
 
+def scaling_task(name: str, mode: str) -> float:
+    """One run of a set in one mode (a job of the runner); its wall seconds where it ran."""
+    info, split = daisy_runner.protocol_split(name, DATA, None, False)
+    started = time.perf_counter()
+    daisy_runner.mode_run(name, mode, 0, split.identification, split.validation, info.m, info.ell, "auto",
+                          dict(daisy_runner.SETTINGS))
+    return time.perf_counter() - started
+
+
+def machine_scaling(name: str = "pHdata", mode: str = "eiv", rounds: int = 2) -> dict:
+    """What the machine's cores give at most: one job twice, one after the other in this process, against
+    twice at once in two worker processes started (and warmed) before the clock. 0.5 for two whole cores."""
+    with concurrent.futures.ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn")) as pool:
+        list(pool.map(scaling_task, [name, name], [mode, mode]))  # import and warm both workers
+        scaling_task(name, mode)  # and this process
+        one, two = [], []
+        for _ in range(rounds):
+            started = time.perf_counter()
+            scaling_task(name, mode), scaling_task(name, mode)
+            one.append(time.perf_counter() - started)
+            started = time.perf_counter()
+            list(pool.map(scaling_task, [name, name], [mode, mode]))
+            two.append(time.perf_counter() - started)
+    return {"task": [name, mode], "one_process_twice": min(one), "two_processes_at_once": min(two),
+            "ratio": min(two) / min(one)}
+
+
 def main(argv: list[str]) -> int:
     options = dict(a[2:].split("=", 1) for a in argv if a.startswith("--") and "=" in a)
     rounds, workers = int(options.get("rounds", 2)), int(options.get("workers", 2))
@@ -67,6 +96,8 @@ def main(argv: list[str]) -> int:
             same = files.setdefault(key, files_of(results)) == files_of(results)
             print(f"round {k + 1} {key}: {wall:.1f} s (load average before {loads[key][-1]:.2f}; "
                   f"files as in its first round: {same})", flush=True)
+    scaling = machine_scaling()
+    print(f"two processes at once / one process twice: {scaling['ratio']:.2f}", flush=True)
     best = {key: min(values) for key, values in seconds.items()}
     record = {
         "what": "DAISY Table 1, 17 sets, both modes, ident's defaults; wall seconds including the cluster's "
@@ -75,7 +106,7 @@ def main(argv: list[str]) -> int:
         "seconds": seconds, "best": best, "ratio": best[name] / best["serial"],
         "identical_files": files["serial"] == files[name],
         "longest_run_seconds": min(longest),
-        "load_average_before": loads,
+        "load_average_before": loads, "machine_scaling": scaling,
         "machine": {"cpus": os.cpu_count(), "python": platform.python_version()},
     }
     RESULTS.write_text(json.dumps(record, indent=1) + "\n")
