@@ -592,8 +592,8 @@ def misfit_vs_lag(w, m=None, lags=None, *, inputs=None, outputs=None, exct=None,
         Where a lag's misfit exceeds that of a smaller lag (a local minimum), identify it again from
         the smaller lag's model and keep the better (default True; see ``LagCurve.restarted``).
     executor : concurrent.futures.Executor-like, optional
-        Identifies the lags through ``executor.submit`` (default: one after the other; the restarts,
-        which depend on each other, here).
+        Identifies the lags through ``executor.submit``, the largest lag first, by ``ident.executors``
+        (default: one after the other; the restarts, which depend on each other, here).
 
     Returns
     -------
