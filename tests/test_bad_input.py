@@ -1446,3 +1446,28 @@ STATE_PRIOR_CASES = _state_prior_cases()
 @pytest.mark.parametrize("name, call, error, words", STATE_PRIOR_CASES, ids=[c[0] for c in STATE_PRIOR_CASES])
 def test_bad_input_of_the_state_prior_is_refused_clearly(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# ------------------------------------------------------------------------------------------------
+# issue 28: the one executor policy (ident.executors.run_tasks)
+
+from ident.executors import run_tasks  # noqa: E402
+
+
+def _square(x):
+    return x * x
+
+
+EXECUTOR_CASES = [
+    ('sizes too short', lambda: run_tasks(_square, [(1,), (2,)], sizes=[1]),
+     ValueError, 'sizes must give one size per task \\(2\\), got 1'),
+    ('executor a class', lambda: run_tasks(_square, [(1,)], executor=dict),
+     TypeError, 'executor must be an executor object, got the class dict'),
+    ('executor without submit', lambda: run_tasks(_square, [(1,)], executor=3),
+     TypeError, 'executor must be None .* got int, which has no submit method'),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", EXECUTOR_CASES, ids=[c[0] for c in EXECUTOR_CASES])
+def test_bad_arguments_of_the_executor_policy_are_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

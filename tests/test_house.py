@@ -8,6 +8,8 @@
   paper's inline help, with a line per parameter); a module has at most 800 lines.
 - Every warning class of the package is exported from ``ident`` (issue 31), so that a user filters
   it by class without knowing the module that raises it.
+- One module submits work to executors, ``ident.executors`` (issue 28): one policy for parallel work
+  (largest first, results in order, cancelled on Ctrl-C, models across processes as matrices).
 - The literate tooling, ``literate_tools/`` (what ``tangle.py`` and ``weave.py`` run), keeps the same
   rules of length and of imports (issue 28); its parser and tangler import the standard library only
   (the tangler runs before anything is installed), the example runner that ``tests/test_examples.py``
@@ -94,6 +96,17 @@ def test_the_solver_imports_nothing_of_the_system_theory() -> None:
                 reached.add(imported)
                 stack.append(imported)
     assert reached - solver <= {"ident.structure", "ident.hankel", "ident.starts"}, reached - solver
+
+
+def submitting_modules() -> set[str]:
+    """The modules of ident with a call of some object's ``submit`` method."""
+    return {name for name, path in MODULES.items() if name.startswith("ident")
+            for node in ast.walk(ast.parse(path.read_text()))
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "submit"}
+
+
+def test_exactly_one_module_submits_work_to_executors() -> None:
+    assert submitting_modules() == {"ident.executors"}
 
 
 def function_lengths(path: Path) -> list[tuple[int, str]]:

@@ -15,8 +15,8 @@ from ident.caller import warn_at_caller
 from ident.affine import without_offset
 from ident.data_forms import as_series, checked_inputs_count, in_variable_order, real_array, with_roles
 from ident.frames import check_model_sample_time, differences, has_default_names, is_data_frame, is_frame_sequence
-from ident.identification import (checked_sample_time, ident, misfit, run_tasks, scale_exponent,
-                                  scaled)
+from ident.executors import run_tasks
+from ident.identification import checked_sample_time, ident, misfit, scale_exponent, scaled
 from ident.lag_arguments import (CHOOSE_LAG_HOLDOUT, checked_curve_arguments, checked_lags, checked_validation,
                                  lag_refusal)
 from ident.representations import inistate, is_state_space, simulate
@@ -592,8 +592,8 @@ def misfit_vs_lag(w, m=None, lags=None, *, inputs=None, outputs=None, exct=None,
         Where a lag's misfit exceeds that of a smaller lag (a local minimum), identify it again from
         the smaller lag's model and keep the better (default True; see ``LagCurve.restarted``).
     executor : concurrent.futures.Executor-like, optional
-        Identifies the lags through ``executor.submit`` (default: one after the other; the restarts,
-        which depend on each other, here).
+        Identifies the lags through ``executor.submit``, the largest lag first, by ``ident.executors``
+        (default: one after the other; the restarts, which depend on each other, here).
 
     Returns
     -------
@@ -610,7 +610,7 @@ def misfit_vs_lag(w, m=None, lags=None, *, inputs=None, outputs=None, exct=None,
     validation_w = None if validation is None else checked_validation(validation, n_vars)[:, order]  # roles' order
     options = {"inputs": inputs, "outputs": outputs, "exct": exct, "wini": wini, "init": init, "maxiter": maxiter,
                "tol": tol, "refine": refine, "dt": dt, "offset": offset}
-    points = run_tasks(lag_point, [(w, m, lag, validation_w, options) for lag in lags], executor)
+    points = run_tasks(lag_point, [(w, m, lag, validation_w, options) for lag in lags], executor, sizes=list(lags))
     restarted = [False] * len(lags)
     if restart:
         restarted = restart_local_minima(w, m, lags, points, validation_w, options)
