@@ -118,3 +118,40 @@ def test_the_order_inside_the_misfit_is_at_most_the_truncations(output_error) ->
     assert fitted.M <= truncated.M * (1 + 1e-10)
     assert fitted.M == pytest.approx(misfit(series, model, exct=exct)[0], rel=1e-6)  # the model's own misfit
     assert fitted.M == pytest.approx(sum(np.sum((w - x) ** 2) for w, x in zip(series, wh)), rel=1e-6)
+
+
+@pytest.mark.parametrize("m, lags, ell", [(1, (2, 1), 2), (1, (3,), 4), (2, (2, 2, 1), 2)],
+                         ids=["indices-2-1-at-lag-2", "siso-3-at-lag-4", "indices-2-2-1-at-lag-2"])
+def test_choose_order_finds_the_order_of_exact_data(m, lags, ell) -> None:
+    from ident import choose_order
+    rng = np.random.default_rng(40 + sum(lags))
+    A, B, C, D = system_with_lags(lags, m, rng)
+    u = rng.standard_normal((300, m))
+    w = np.hstack([u, simulate(make_ss(A, B, C, D), u, rng.standard_normal(sum(lags)))])
+    kept = w.copy()
+    choice = choose_order(w, m, ell)
+    assert np.array_equal(w, kept)
+    assert choice.n == sum(lags) < ell * len(lags)
+    assert choice.orders == list(range(1, ell * len(lags) + 1))
+    true_index = choice.orders.index(sum(lags))
+    assert np.all(choice.holdout_fits[true_index:] > 99.9)  # every order from the true one simulates exactly
+    assert choice.holdout_fits[true_index - 1] < 99  # one state fewer cannot
+    energy = np.sum(w[:choice.n_estimation] ** 2)
+    assert choice.misfits[true_index] < 1e-12 * energy and choice.misfits[true_index - 1] > 1e-6 * energy
+    assert choice.n_estimation + choice.n_holdout == len(w)
+
+
+def test_choose_order_keeps_ell_p_unless_a_lower_order_predicts_better() -> None:
+    from ident import choose_order
+    rng = np.random.default_rng(44)
+    A, B, C, D = system_with_lags((2, 2), 1, rng)  # order ell p = 4: nothing to drop
+    u = rng.standard_normal((400, 1))
+    w = np.hstack([u, simulate(make_ss(A, B, C, D), u, rng.standard_normal(4))])
+    w[:, 1:] += 0.05 * w[:, 1:].std(axis=0) * rng.standard_normal((400, 2))
+    choice = choose_order(w, 1, 2, exct=[0])
+    assert choice.n == 4
+    best_lower = np.nanmax(choice.holdout_fits[:-1])
+    assert best_lower <= choice.holdout_fits[-1] + 1.0  # the rule's condition for keeping ell p
+    partial = choose_order(w, 1, 2, [1, 2, 3], exct=[0])  # ell p not judged: the best of those, within a point
+    assert partial.orders == [1, 2, 3] and partial.n in (1, 2, 3)
+    assert partial.holdout_fits[partial.orders.index(partial.n)] >= np.nanmax(partial.holdout_fits) - 1.0

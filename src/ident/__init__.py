@@ -14,6 +14,7 @@ from ident.error_bars import model_uncertainty
 from ident.hankel import block_hankel, mosaic_hankel, time_major_permutation
 from ident.identification import IdentInfo, Offset, Reduction, UnstableModelWarning, ident, misfit
 from ident.model_file import load_model, save_model
+from ident.order_choice import OrderChoice, choose_order
 from ident.reduction import balanced_truncation
 from ident.representations import IllConditionedWarning, kernel_to_ss, ss_to_kernel
 from ident.smoothing import MisfitWarning
@@ -31,6 +32,7 @@ __all__ = [
     "to_continuous",
     "model_uncertainty", "Uncertainty", "UncertaintyWarning", "Stability",
     "complexity", "io_partitions", "Complexity", "IOPartition",
+    "choose_order", "OrderChoice",
     "UnstableModelWarning", "IllConditionedWarning",
     "InfeasibleKernelError", "kernel_to_ss", "ss_to_kernel", "block_hankel", "mosaic_hankel",
     "time_major_permutation", "Job", "JobResult", "run_jobs", "dask_executor",
