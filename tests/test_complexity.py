@@ -155,3 +155,19 @@ def test_choose_order_keeps_ell_p_unless_a_lower_order_predicts_better() -> None
     partial = choose_order(w, 1, 2, [1, 2, 3], exct=[0])  # ell p not judged: the best of those, within a point
     assert partial.orders == [1, 2, 3] and partial.n in (1, 2, 3)
     assert partial.holdout_fits[partial.orders.index(partial.n)] >= np.nanmax(partial.holdout_fits) - 1.0
+
+
+def test_a_noisy_free_response_is_read_by_its_singular_values() -> None:
+    from ident.data_complexity import free_response_complexity, normalised
+    rng = np.random.default_rng(3536)
+    right = 0
+    for _ in range(4):
+        (w,), _ = trajectories(0, (2, 2), rng, [1000])
+        noisy = w + 0.1 * w.std(axis=0) * rng.standard_normal(w.shape)
+        found = complexity(noisy, noisy=True)
+        assert found.m == 0 and found.n <= 4  # the bound on the noise's singular values: no state too many
+        right += found.n == 4
+    assert right >= 3  # the benchmark's rate for free responses is about 70 %
+    (w,), _ = trajectories(1, (3,), rng, [1000])  # an input: the counts above the floor grow with the window
+    noisy = w + 0.1 * w.std(axis=0) * rng.standard_normal(w.shape)
+    assert free_response_complexity(normalised([noisy])) is None
