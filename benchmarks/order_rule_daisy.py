@@ -58,6 +58,7 @@ def run_set(info, directory):
     chosen = {"choose_order": choice.n, **other_rules(choice.orders, choice.holdout_fits)}
     ell_p_fit = validation_fits[-1]
     return {"name": info.name, "m": m, "p": info.p, "ell": ell, "ell_p": ell * info.p, "orders": choice.orders,
+            "n_estimation": choice.n_estimation, "n_holdout": choice.n_holdout, "n_validation": len(validation),
             "holdout_fits": [round(float(x), 3) for x in choice.holdout_fits],
             "validation_fits": [round(float(x), 3) for x in validation_fits],
             "chosen": chosen, "chosen_fit": {rule: round(validation_fits[choice.orders.index(n)], 3) for rule, n in chosen.items()},
