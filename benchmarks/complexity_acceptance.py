@@ -10,7 +10,8 @@ Noisy part: the same classes, 1000 samples, 10 % noise on every variable (standa
 times the variable's own); scored: complexity(w, noisy=True).n is the true order. For the free
 responses (m = 0) also how far the weakest state is above the noise where the response is strongest
 (`weakest_state_to_noise`: below 1, no rule can see it in this record), and the score of the
-canonical correlations alone, without the rule for free responses (`order_right_correlations_only`).
+canonical correlations alone, without the rule for free responses (`order_right_correlations_only`);
+and the score of three other draws of the same number of cases (seeds 1, 2, 3: `other_draws`).
 
 Writes benchmarks/results/complexity.json. Takes a few minutes.
 
@@ -49,6 +50,9 @@ def trajectory(m, lags, rng, lengths):
     where = np.argsort(order)  # where[k]: the column of w that holds variable k of [u y]
     true_sets = {tuple(sorted(int(where[k]) for k in inputs)) for inputs in valid_input_sets(D, m)}
     return series, true_sets
+
+
+OTHER_SEEDS = (1, 2, 3)  # the noisy part drawn again: how much its score depends on the draw
 
 
 def exact_part(cases, rng):
@@ -140,6 +144,8 @@ def main(argv):
               f"input sets right {results['exact']['partitions_right']}/{cases} ({time.perf_counter() - started:.0f} s)")
     if noisy_cases:
         results["noisy"] = noisy_part(noisy_cases, np.random.default_rng(3535))
+        results["noisy"]["other_draws"] = {  # the spread of the score: the same cases drawn with other seeds
+            str(seed): noisy_part(noisy_cases, np.random.default_rng(seed))["order_right"] for seed in OTHER_SEEDS}
         print(f"noisy: order right {results['noisy']['order_right']}/{noisy_cases}")
     out.write_text(json.dumps(results, indent=1) + "\n")
     print(f"wrote {out}")
