@@ -152,9 +152,21 @@ def test_choose_order_keeps_ell_p_unless_a_lower_order_predicts_better() -> None
     assert choice.n == 4
     best_lower = np.nanmax(choice.holdout_fits[:-1])
     assert best_lower <= choice.holdout_fits[-1] + 1.0  # the rule's condition for keeping ell p
-    partial = choose_order(w, 1, 2, [1, 2, 3], exct=[0])  # ell p not judged: the best of those, within a point
-    assert partial.orders == [1, 2, 3] and partial.n in (1, 2, 3)
-    assert partial.holdout_fits[partial.orders.index(partial.n)] >= np.nanmax(partial.holdout_fits) - 1.0
+    partial = choose_order(w, 1, 2, [1, 3], exct=[0])  # ell p not judged: the smallest within a point of the best
+    assert partial.orders == [1, 3] and np.array_equal(partial.holdout_fits, choice.holdout_fits[[0, 2]])
+
+
+def test_the_order_rule_keeps_ell_p_unless_beaten_by_more_than_a_point() -> None:
+    from ident.order_choice import chosen_order
+    orders, far = [1, 2, 3, 4], np.array([5.0, 2.0, 1.0, 0.5])  # misfits: no lower order fits as well
+    assert chosen_order(orders, np.array([50.0, 80.0, 90.9, 90.0]), far, 1.0, 4) == 4  # 0.9 better: a tie
+    assert chosen_order(orders, np.array([50.0, 91.2, 90.5, 90.0]), far, 1.0, 4) == 2  # 1.2 better: reduced
+    assert chosen_order(orders, np.array([50.0, 91.2, 91.9, 90.0]), far, 1.0, 4) == 2  # the smallest within a point
+    assert chosen_order(orders, np.array([np.nan, np.nan, 95.0, 90.0]), far, 1.0, 4) == 3  # refused orders skipped
+    exact = np.array([5.0, 1e-3, 1e-20, 1e-28])  # order 3 fits the estimation part as well as ell p
+    assert chosen_order(orders, np.array([50.0, 90.0, 100.0, 100.0]), exact, 1.0, 4) == 3
+    assert chosen_order(orders, np.array([50.0, 90.0, 100.0, 100.0]), exact, 1e-12, 4) == 4  # 1e-20 is not tiny there
+    assert chosen_order([1, 2, 3], np.array([80.0, 81.0, 79.0]), far[:3], 1.0, 4) == 1  # ell p not among them
 
 
 def test_a_noisy_free_response_is_read_by_its_singular_values() -> None:
