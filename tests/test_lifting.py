@@ -101,3 +101,16 @@ def test_noisy_periodic_data_still_give_a_start() -> None:
     assert lifted and not lifted[0].error
     assert h2_error(system, sysh) < 0.05  # a noisy estimate (noise 1 % of the data), not the model itself
     np.testing.assert_array_equal(noisy, before)  # the caller's data untouched
+
+
+def test_no_lifted_start_without_inputs() -> None:
+    """An autonomous model has no impulse response to realise: its periodic gaps get the default starts only."""
+    rng = np.random.default_rng(8)
+    system = random_system(1, 1, 3, rng)
+    y = simulate(system, np.zeros((120, 1)), rng.standard_normal(3))
+    y[1::2] = np.nan
+    assert gap_period([np.where(np.isnan(y), 0.0, 1.0)], 0) is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        info = ident(y, 0, 3)[1]
+    assert "lifted" not in [c.start for c in info.candidates]

@@ -247,3 +247,24 @@ def test_auto_weights_are_raw_or_std_by_the_hold_out() -> None:
             for choice in (None, "std")}
     expected = "std" if fits["std"] > fits[None] else None
     assert ident(w, 1, 1, weights="auto")[1].M == pytest.approx(ident(w, 1, 1, weights=expected)[1].M, rel=1e-12)
+
+
+def test_auto_weights_need_no_hold_out_where_std_only_scales_the_misfit() -> None:
+    from ident.incomplete import chosen_weights
+    rng = np.random.default_rng(31)
+    system = random_system(1, 1, 2, rng)
+    (w,) = exact_series(system, [120], rng)
+    noisy = w + 0.1 * rng.standard_normal(w.shape)
+    calls = []
+
+    def identify(*args, **kwargs):
+        calls.append(kwargs.get("weights"))
+        return ident(*args, **kwargs)
+
+    # output error with one output: "std" weighs the one free variable, the same problem as raw
+    assert chosen_weights(identify, [noisy], "auto", 1, 2, [0], [None], {}) is None and calls == []
+    sysh, info, _, _ = ident(noisy, 1, 2, exct=[0], weights="auto")
+    assert info.M == pytest.approx(ident(noisy, 1, 2, exct=[0])[1].M, rel=1e-12)
+    # errors-in-variables: u and y have different spreads, so the hold-out decides
+    assert chosen_weights(identify, [noisy * [1.0, 20.0]], "auto", 1, 2, [], [None], {}) in (None, "std")
+    assert calls == [None, "std"]
