@@ -56,7 +56,6 @@ Needs markdown-it-py, mdit-py-plugins, latex2mathml, Pygments, matplotlib and ju
 from __future__ import annotations
 
 import argparse
-import base64
 import contextlib
 import html
 import inspect
@@ -628,6 +627,9 @@ class Weave:
         return name
 
     def notebook_outputs(self, result: Result) -> list:
+        """The example's printed text, and each figure as a link to its file in the woven folder
+        (``../figures/...`` from ``notebooks/``): the figures are on disk once, not again inside every
+        notebook as base64 (which would double their weight in the woven document)."""
         import nbformat
 
         outputs = []
@@ -635,16 +637,11 @@ class Weave:
             if text:
                 outputs.append(nbformat.v4.new_output("stream", name=stream, text=text))
         for figure in result.figures:
-            suffix = Path(figure.path).suffix.lower()
-            data = (self.build / figure.path).read_bytes()
-            if suffix == ".svg":
-                bundle = {"image/svg+xml": data.decode("utf-8")}
-            elif suffix in MIME:
-                bundle = {MIME[suffix]: base64.b64encode(data).decode("ascii")}
-            else:
+            if Path(figure.path).suffix.lower() not in MIME:
                 continue
-            bundle["text/plain"] = f"<Figure {Path(figure.path).name}>"
-            outputs.append(nbformat.v4.new_output("display_data", data=bundle))
+            name = Path(figure.path).name
+            outputs.append(nbformat.v4.new_output("display_data", data={
+                "text/markdown": f"![{name}](../{figure.path})", "text/plain": f"<Figure {name}>"}))
         return outputs
 
 

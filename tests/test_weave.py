@@ -289,7 +289,10 @@ def test_notebooks_carry_the_outputs(small) -> None:
     code = [cell for cell in notebook.cells if cell.cell_type == "code"]
     assert [cell.execution_count for cell in code] == [1, 2, 3]
     assert code[0].outputs[0]["text"] == "hello <world> & all\n"
-    assert "image/png" in code[0].outputs[1]["data"]
+    figure = code[0].outputs[1]["data"]  # a link to the figure's file beside the notebooks, not its bytes again
+    assert "image/png" not in figure and figure["text/markdown"].startswith("![") and "](../figures/" in figure["text/markdown"]
+    linked = figure["text/markdown"].split("](../", 1)[1].rstrip(")")
+    assert (out / linked).is_file()
     assert [cell.id for cell in notebook.cells] == [f"cell-{k}" for k in range(1, len(notebook.cells) + 1)]
     assert notebook.metadata["kernelspec"]["name"] == "python3"
 
