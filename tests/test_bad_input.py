@@ -1471,3 +1471,22 @@ EXECUTOR_CASES = [
 @pytest.mark.parametrize("name, call, error, words", EXECUTOR_CASES, ids=[c[0] for c in EXECUTOR_CASES])
 def test_bad_arguments_of_the_executor_policy_are_refused_clearly(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# ------------------------------------------------------------------------------------------------
+# issue 28: the table of named starts (ident.starts.STARTS) names the starts in every refusal
+
+from ident import starts  # noqa: E402
+
+START_TABLE_CASES = [
+    ("the caller's start by name", lambda: ident(W, 1, 1, init="sys0"),
+     ValueError, "init: unknown start 'sys0'; expected 'auto' or one or more of 'lra', 'arx', 'subspace'"),
+    ('a name that is not a string', lambda: ident(W, 1, 1, init=[b"lra"]), ValueError, "init: unknown start b'lra'"),
+    ('an unknown start of starts.start', lambda: starts.start("n4sid", np.zeros(12), Structure.time_major(2, 1, [5]), 3),
+     ValueError, "unknown start 'n4sid'; expected one of lra, arx, subspace"),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", START_TABLE_CASES, ids=[c[0] for c in START_TABLE_CASES])
+def test_bad_start_names_are_refused_with_the_tables_names(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

@@ -110,6 +110,8 @@ def test_identify_from_npz_with_u_and_y_and_default_outputs(tmp_path, capsys, mo
     (["daisy", "erie", "--maxiter", "-1"], "argument --maxiter: must be a non-negative integer, got -1"),
     (["daisy", "erie", "--tol=-1e-5"], "argument --tol: must be a finite positive number, got -1e-5"),
     (["daisy", "erie", "--out", "{csv}"], "--out: {csv} is a file, not a folder"),
+    (["identify", "{csv}", "--inputs", "1", "--outputs", "3", "--lag", "1", "--init", "sys0"],
+     "argument --init: invalid choice: 'sys0'"),  # the caller's start is a model, not a name of the table
     (["lag", "{csv}", "--inputs", "1", "--outputs", "3", "--holdout", "1.5"],
      "argument --holdout: must be a fraction in [0, 1), got 1.5"),
     (["lag", "{csv}", "--inputs", "1", "--outputs", "3", "--holdout", "-0.5"], "argument --holdout: must be a fraction"),
