@@ -7,7 +7,11 @@ the variables in a random order. Scored: complexity(w) gives the true (m, ell, n
 valid sets of io_partitions(w, m) are the true ones (`valid_input_sets` of the system's D).
 
 Noisy part: the same classes, 1000 samples, 10 % noise on every variable (standard deviation 0.1
-times the variable's own); scored: complexity(w, noisy=True).n is the true order.
+times the variable's own); scored: complexity(w, noisy=True).n is the true order. For the free
+responses (m = 0) also how far the weakest state is above the noise where the response is strongest
+(`weakest_state_to_noise`: below 1, no rule can see it in this record), and the score of the
+canonical correlations alone, without the rule for free responses (`order_right_correlations_only`);
+and the score of three other draws of the same number of cases (seeds 1, 2, 3: `other_draws`).
 
 Writes benchmarks/results/complexity.json. Takes a few minutes.
 
@@ -21,7 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from ident import complexity, io_partitions
+from ident import data_complexity
 from ident.data_complexity import system_with_lags, valid_input_sets
+from ident.hankel import mosaic_hankel
 from ident.representations import make_ss, simulate
 
 CLASSES = {  # name: (m, observability indices)
@@ -44,6 +50,9 @@ def trajectory(m, lags, rng, lengths):
     where = np.argsort(order)  # where[k]: the column of w that holds variable k of [u y]
     true_sets = {tuple(sorted(int(where[k]) for k in inputs)) for inputs in valid_input_sets(D, m)}
     return series, true_sets
+
+
+OTHER_SEEDS = (1, 2, 3)  # the noisy part drawn again: how much its score depends on the draw
 
 
 def exact_part(cases, rng):
@@ -71,13 +80,40 @@ def exact_part(cases, rng):
             "failures": failures[:20]}
 
 
+def weakest_state_to_noise(exact_w, w, order):
+    """For a free response: the order-th singular value of H_L of the exact response's first 2 L q columns
+    (L = order + 2, the variables divided by the noisy record's root mean square, as complexity does),
+    relative to the bound on the noise's singular values there, s (sqrt(columns) + sqrt(rows)), with s the
+    noise's true standard deviation: below 1, the weakest state is under the noise even where the response
+    is strongest."""
+    rms = np.sqrt(np.mean(w ** 2, axis=0))
+    noise = np.max(0.1 * exact_w.std(axis=0) / rms)
+    depth = order + 2
+    columns = 2 * depth * w.shape[1]
+    hankel = mosaic_hankel([(exact_w / rms)[:columns + depth - 1]], depth)
+    singular_values = np.linalg.svd(hankel, compute_uv=False)
+    return round(float(singular_values[order - 1] / (noise * (np.sqrt(columns) + np.sqrt(hankel.shape[0])))), 3)
+
+
+def correlations_only_order(w):
+    """The order by the canonical correlations alone, without the rule for free responses (as before it)."""
+    kept = data_complexity.free_response_complexity
+    data_complexity.free_response_complexity = lambda series: None
+    try:
+        return complexity(w, noisy=True).n
+    except ValueError:
+        return -1
+    finally:
+        data_complexity.free_response_complexity = kept
+
+
 def noisy_part(cases, rng):
     scores = {name: {"cases": 0, "order_right": 0, "orders": []} for name in CLASSES}
     for case in range(cases):
         name = list(CLASSES)[case % len(CLASSES)]
         m, lags = CLASSES[name]
-        (w,), _ = trajectory(m, lags, rng, [1000])
-        w = w + 0.1 * w.std(axis=0) * rng.standard_normal(w.shape)
+        (exact_w,), _ = trajectory(m, lags, rng, [1000])
+        w = exact_w + 0.1 * exact_w.std(axis=0) * rng.standard_normal(exact_w.shape)
         row = scores[name]
         row["cases"] += 1
         try:
@@ -86,7 +122,13 @@ def noisy_part(cases, rng):
             order = -1
         row["order_right"] += order == sum(lags)
         row["orders"].append(order)
-    return {"cases": cases, "order_right": sum(r["order_right"] for r in scores.values()), "classes": scores}
+        row["order_right_correlations_only"] = row.get("order_right_correlations_only", 0) + (
+            correlations_only_order(w) == sum(lags))
+        if m == 0:
+            row.setdefault("weakest_state_to_noise", []).append(weakest_state_to_noise(exact_w, w, sum(lags)))
+    return {"cases": cases, "order_right": sum(r["order_right"] for r in scores.values()),
+            "order_right_correlations_only": sum(r["order_right_correlations_only"] for r in scores.values()),
+            "classes": scores}
 
 
 def main(argv):
@@ -102,6 +144,8 @@ def main(argv):
               f"input sets right {results['exact']['partitions_right']}/{cases} ({time.perf_counter() - started:.0f} s)")
     if noisy_cases:
         results["noisy"] = noisy_part(noisy_cases, np.random.default_rng(3535))
+        results["noisy"]["other_draws"] = {  # the spread of the score: the same cases drawn with other seeds
+            str(seed): noisy_part(noisy_cases, np.random.default_rng(seed))["order_right"] for seed in OTHER_SEEDS}
         print(f"noisy: order right {results['noisy']['order_right']}/{noisy_cases}")
     out.write_text(json.dumps(results, indent=1) + "\n")
     print(f"wrote {out}")

@@ -1398,6 +1398,48 @@ def test_bad_input_of_complexity_is_refused_clearly(name, call, error, words) ->
     test_bad_input_is_refused_clearly(name, call, error, words)
 
 
+# --- the order chosen from the data (25-complexity.md): choose_order ---
+from ident import choose_order  # noqa: E402
+
+W_ORDER = np.random.default_rng(36).standard_normal((120, 3))  # m = 1, p = 2: orders 1..4 at ell = 2
+
+ORDER_CASES = [
+    ('choose_order order zero', lambda: choose_order(W_ORDER, 1, 2, [0, 1]),
+     ValueError, r'orders must satisfy 1 <= orders <= 4 = ell p'),
+    ('choose_order order above ell p', lambda: choose_order(W_ORDER, 1, 2, [2, 5]),
+     ValueError, r'orders must satisfy 1 <= orders <= 4 = ell p, the order of the identified model, got 5'),
+    ('choose_order order a float', lambda: choose_order(W_ORDER, 1, 2, [2.0]),
+     TypeError, r'orders must be an integer, got 2.0 \(float\)'),
+    ('choose_order orders a number', lambda: choose_order(W_ORDER, 1, 2, 3),
+     TypeError, r'orders must be a sequence of integers in 1..ell p = 4'),
+    ('choose_order orders empty', lambda: choose_order(W_ORDER, 1, 2, []),
+     ValueError, r'orders must be a non-empty sequence of integers in 1..ell p = 4'),
+    ('choose_order ell zero', lambda: choose_order(W_ORDER, 1, 0),
+     ValueError, r'ell must satisfy 1 <= ell .*there is no order to choose'),
+    ('choose_order ell a float', lambda: choose_order(W_ORDER, 1, 2.0),
+     TypeError, r'ell must be an integer, got 2.0'),
+    ('choose_order m too large', lambda: choose_order(W_ORDER, 3, 2),
+     ValueError, r'm must satisfy 0 <= m <= 2'),
+    ('choose_order too short for the lag', lambda: choose_order(W_ORDER[:12], 1, 2),
+     ValueError, r'ell: lag 2 is too long for the data: the estimation part, the first 9 of the 12 samples'),
+    ('choose_order held-out part too short', lambda: choose_order(W_ORDER[:40], 1, 2, holdout=0.05),
+     ValueError, r'w is too short for the hold-out rule: its held-out part has 2 samples'),
+    ('choose_order holdout one', lambda: choose_order(W_ORDER, 1, 2, holdout=1.0),
+     ValueError, r'holdout must be a fraction in \(0, 1\), got 1.0'),
+    ('choose_order several series', lambda: choose_order([W_ORDER, W_ORDER], 1, 2),
+     TypeError, r'w must be one series, a T x q array or a DataFrame, for choose_order'),
+    ('choose_order order_fit unknown', lambda: choose_order(W_ORDER, 1, 2, order_fit="direct"),
+     ValueError, r"order_fit must be one of 'truncation', 'misfit', got 'direct'"),
+    ('choose_order exct too many', lambda: choose_order(W_ORDER, 1, 2, exct=[0, 1]),
+     ValueError, r'exct'),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", ORDER_CASES, ids=[c[0] for c in ORDER_CASES])
+def test_bad_input_of_choose_order_is_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)
+
+
 # ---- the state prior of forecast (23-completion-and-forecasting.md, issue 33's robot arm) ----
 def _state_prior_cases():
     from ident import StatePrior, forecast

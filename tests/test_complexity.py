@@ -118,3 +118,68 @@ def test_the_order_inside_the_misfit_is_at_most_the_truncations(output_error) ->
     assert fitted.M <= truncated.M * (1 + 1e-10)
     assert fitted.M == pytest.approx(misfit(series, model, exct=exct)[0], rel=1e-6)  # the model's own misfit
     assert fitted.M == pytest.approx(sum(np.sum((w - x) ** 2) for w, x in zip(series, wh)), rel=1e-6)
+
+
+@pytest.mark.parametrize("m, lags, ell", [(1, (2, 1), 2), (1, (3,), 4), (2, (2, 2, 1), 2)],
+                         ids=["indices-2-1-at-lag-2", "siso-3-at-lag-4", "indices-2-2-1-at-lag-2"])
+def test_choose_order_finds_the_order_of_exact_data(m, lags, ell) -> None:
+    from ident import choose_order
+    rng = np.random.default_rng(40 + sum(lags))
+    A, B, C, D = system_with_lags(lags, m, rng)
+    u = rng.standard_normal((300, m))
+    w = np.hstack([u, simulate(make_ss(A, B, C, D), u, rng.standard_normal(sum(lags)))])
+    kept = w.copy()
+    choice = choose_order(w, m, ell)
+    assert np.array_equal(w, kept)
+    assert choice.n == sum(lags) < ell * len(lags)
+    assert choice.orders == list(range(1, ell * len(lags) + 1))
+    true_index = choice.orders.index(sum(lags))
+    assert np.all(choice.holdout_fits[true_index:] > 99.9)  # every order from the true one simulates exactly
+    assert choice.holdout_fits[true_index - 1] < 99  # one state fewer cannot
+    energy = np.sum(w[:choice.n_estimation] ** 2)
+    assert choice.misfits[true_index] < 1e-12 * energy and choice.misfits[true_index - 1] > 1e-6 * energy
+    assert choice.n_estimation + choice.n_holdout == len(w)
+
+
+def test_choose_order_keeps_ell_p_unless_a_lower_order_predicts_better() -> None:
+    from ident import choose_order
+    rng = np.random.default_rng(44)
+    A, B, C, D = system_with_lags((2, 2), 1, rng)  # order ell p = 4: nothing to drop
+    u = rng.standard_normal((400, 1))
+    w = np.hstack([u, simulate(make_ss(A, B, C, D), u, rng.standard_normal(4))])
+    w[:, 1:] += 0.05 * w[:, 1:].std(axis=0) * rng.standard_normal((400, 2))
+    choice = choose_order(w, 1, 2, exct=[0])
+    assert choice.n == 4
+    best_lower = np.nanmax(choice.holdout_fits[:-1])
+    assert best_lower <= choice.holdout_fits[-1] + 1.0  # the rule's condition for keeping ell p
+    partial = choose_order(w, 1, 2, [1, 3], exct=[0])  # ell p not judged: the smallest within a point of the best
+    assert partial.orders == [1, 3] and np.array_equal(partial.holdout_fits, choice.holdout_fits[[0, 2]])
+
+
+def test_the_order_rule_keeps_ell_p_unless_beaten_by_more_than_a_point() -> None:
+    from ident.order_choice import chosen_order
+    orders, far = [1, 2, 3, 4], np.array([5.0, 2.0, 1.0, 0.5])  # misfits: no lower order fits as well
+    assert chosen_order(orders, np.array([50.0, 80.0, 90.9, 90.0]), far, 1.0, 4) == 4  # 0.9 better: a tie
+    assert chosen_order(orders, np.array([50.0, 91.2, 90.5, 90.0]), far, 1.0, 4) == 2  # 1.2 better: reduced
+    assert chosen_order(orders, np.array([50.0, 91.2, 91.9, 90.0]), far, 1.0, 4) == 2  # the smallest within a point
+    assert chosen_order(orders, np.array([np.nan, np.nan, 95.0, 90.0]), far, 1.0, 4) == 3  # refused orders skipped
+    exact = np.array([5.0, 1e-3, 1e-20, 1e-28])  # order 3 fits the estimation part as well as ell p
+    assert chosen_order(orders, np.array([50.0, 90.0, 100.0, 100.0]), exact, 1.0, 4) == 3
+    assert chosen_order(orders, np.array([50.0, 90.0, 100.0, 100.0]), exact, 1e-12, 4) == 4  # 1e-20 is not tiny there
+    assert chosen_order([1, 2, 3], np.array([80.0, 81.0, 79.0]), far[:3], 1.0, 4) == 1  # ell p not among them
+
+
+def test_a_noisy_free_response_is_read_by_its_singular_values() -> None:
+    from ident.data_complexity import free_response_complexity, normalised
+    rng = np.random.default_rng(3536)
+    right = 0
+    for _ in range(4):
+        (w,), _ = trajectories(0, (2, 2), rng, [1000])
+        noisy = w + 0.1 * w.std(axis=0) * rng.standard_normal(w.shape)
+        found = complexity(noisy, noisy=True)
+        assert found.m == 0 and found.n <= 4  # the bound on the noise's singular values: no state too many
+        right += found.n == 4
+    assert right >= 3  # the benchmark's rate for free responses is about 70 %
+    (w,), _ = trajectories(1, (3,), rng, [1000])  # an input: the counts above the floor grow with the window
+    noisy = w + 0.1 * w.std(axis=0) * rng.standard_normal(w.shape)
+    assert free_response_complexity(normalised([noisy])) is None

@@ -97,8 +97,10 @@ def test_the_chain_of_masses_identified_in_continuous_time() -> None:
     model, _, _, _ = ident(w, 1, chain.nstates - 1, init="lra", dt=1.0)
     match = examples.match_eigenvalues(np.linalg.eigvals(to_continuous(model).A), physical)
     on_fastest = (np.abs(physical.imag) > 0.95)[match.partner]
-    assert match.errors[~on_fastest].max() < 1e-4  # the twelve slower modes and one of the two zeros
-    assert match.errors[on_fastest].max() < 1e-2  # the fastest pair: poorly determined by these data
+    assert match.errors[~on_fastest].max() < 1e-6  # the twelve slower modes and one of the two zeros
+    # the fastest pair, weak in these data: within 1e-3 of the physical one (issue 31) because ident realises
+    # exact data from a deeper Hankel matrix (the kernel of depth 15 alone holds it to about 2e-3)
+    assert match.errors[on_fastest].max() < 1e-4
     assert abs(match.unmatched[0]) < 1e-8
 
 
