@@ -202,16 +202,16 @@ def case_daisy(names=None):
     from ident import daisy as daisy_sets
     names = names or [info.name for info in daisy_sets.table1()]
     import control  # noqa: F401  imported before the clock starts (later versions import it on first use)
-    from ident import identification
+    from ident import multistart
     solver_seconds = []  # the solver's own seconds (SLRAResult.time) of every call of ident's slra
-    solve = identification.slra
+    solve = multistart.slra
 
     def timed_slra(*args, **kwargs):
         result = solve(*args, **kwargs)
         solver_seconds.append(result.time)
         return result
 
-    identification.slra = timed_slra
+    multistart.slra = timed_slra
     out = {"seconds": 0.0, "iterations": 0, "sets": {}}
     for name in names:
         started = time.perf_counter()

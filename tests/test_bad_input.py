@@ -539,7 +539,7 @@ def test_extreme_scales_give_the_same_model_and_never_nan(scale) -> None:
     sysh0, info0, _, _ = REFERENCE
     with recorded_warnings() as caught:
         sysh, info, wh, _ = ident(scale * W_NOISY, 1, 1)
-    assert info.converged and "zero misfit" not in info.message and not np.isnan(info.M)
+    assert info.converged and not info.status.exact_data and not np.isnan(info.M)
     np.testing.assert_allclose(sysh.A, sysh0.A, rtol=1e-6, atol=1e-8)
     np.testing.assert_allclose(wh / scale, REFERENCE[2], rtol=1e-6, atol=1e-8)
     exact = info0.M * scale * scale  # in floating point: inf, a subnormal or 0 at the ends
@@ -556,7 +556,7 @@ def test_noisy_tiny_data_are_not_called_exact() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         _, info, _, _ = ident(1e-200 * W_NOISY, 1, 1)
-    assert info.converged and info.message == REFERENCE[1].message
+    assert info.converged and info.status is REFERENCE[1].status and not info.status.exact_data
 
 
 def test_all_zero_data_under_floating_point_errors_as_exceptions() -> None:
@@ -611,13 +611,13 @@ def test_exact_outputs_are_allowed() -> None:
 
 
 def test_infeasible_starts_are_reported_in_the_callers_terms(monkeypatch) -> None:
-    import ident.identification as identification
+    import ident.multistart as multistart
     from ident.solver import InfeasibleKernelError
 
     def infeasible(*args, **kwargs):
         raise InfeasibleKernelError("no feasible initial kernel; unstructured LRA: dpbtrf info=4")
 
-    monkeypatch.setattr(identification, "slra", infeasible)
+    monkeypatch.setattr(multistart, "slra", infeasible)
     with pytest.raises(ValueError, match=r"the data determine no model of the class m = 1, ell = 1 with the exact "
                                          r"variables exct = \[0\] uncorrected") as caught:
         ident(W_NOISY, 1, 1, exct=[0])
@@ -1512,4 +1512,23 @@ EXECUTOR_CASES = [
 
 @pytest.mark.parametrize("name, call, error, words", EXECUTOR_CASES, ids=[c[0] for c in EXECUTOR_CASES])
 def test_bad_arguments_of_the_executor_policy_are_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# ------------------------------------------------------------------------------------------------
+# issue 28: the table of named starts (ident.starts.STARTS) names the starts in every refusal
+
+from ident import starts  # noqa: E402
+
+START_TABLE_CASES = [
+    ("the caller's start by name", lambda: ident(W, 1, 1, init="sys0"),
+     ValueError, "init: unknown start 'sys0'; expected 'auto' or one or more of 'lra', 'arx', 'subspace'"),
+    ('a name that is not a string', lambda: ident(W, 1, 1, init=[b"lra"]), ValueError, "init: unknown start b'lra'"),
+    ('an unknown start of starts.start', lambda: starts.start("n4sid", np.zeros(12), Structure.time_major(2, 1, [5]), 3),
+     ValueError, "unknown start 'n4sid'; expected one of lra, arx, subspace"),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", START_TABLE_CASES, ids=[c[0] for c in START_TABLE_CASES])
+def test_bad_start_names_are_refused_with_the_tables_names(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)

@@ -218,3 +218,47 @@ def test_random_numbers_come_from_seeded_generators(folder: str) -> None:
             for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
             if GLOBAL_RANDOM_STATE.search(line)]
     assert not hits, "draws from numpy's global random state:\n" + "\n".join(hits)
+
+
+# --- issue 28 points 1 and 3: ident's front door stays small; one table names the starts -------------------
+
+MAX_FRONT_DOOR_LINES = 400
+
+
+def test_the_front_door_of_ident_is_at_most_400_lines() -> None:
+    n_lines = len((PACKAGE / "identification.py").read_text(encoding="utf-8").splitlines())
+    assert n_lines <= MAX_FRONT_DOOR_LINES, f"identification.py has {n_lines} lines"
+
+
+def start_names() -> list[str]:
+    """The keys of the table of starts, read from ident/starts.py's source (the dict assigned to STARTS)."""
+    tree = ast.parse((PACKAGE / "starts.py").read_text(encoding="utf-8"))
+    table = next(node.value for node in ast.walk(tree) if isinstance(node, ast.Assign)
+                 and any(isinstance(target, ast.Name) and target.id == "STARTS" for target in node.targets))
+    assert isinstance(table, ast.Dict), "STARTS must be a dict display: the table of named starts"
+    return [key.value for key in table.keys]
+
+
+def code_strings(path: Path) -> list[str]:
+    """The string constants of a module's code: docstrings, the text of f-strings and the names listed in
+    ``__all__`` (the module's functions) left out."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    docstrings = {id(node.body[0].value) for node in ast.walk(tree)
+                  if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef))
+                  and node.body and isinstance(node.body[0], ast.Expr) and isinstance(node.body[0].value, ast.Constant)}
+    in_fstrings = {id(part) for node in ast.walk(tree) if isinstance(node, ast.JoinedStr) for part in node.values}
+    exports = {id(constant) for node in tree.body if isinstance(node, ast.Assign)
+               and any(isinstance(target, ast.Name) and target.id == "__all__" for target in node.targets)
+               for constant in ast.walk(node.value)}
+    left_out = docstrings | in_fstrings | exports
+    return [node.value for node in ast.walk(tree) if isinstance(node, ast.Constant) and isinstance(node.value, str)
+            and id(node) not in left_out]
+
+
+def test_start_names_appear_in_one_table_only() -> None:
+    names = start_names()
+    assert len(names) >= 3 and len(set(names)) == len(names), names
+    found = {(module, name): code_strings(path).count(name) for module, path in IDENT_MODULES.items() for name in names}
+    elsewhere = {key: count for key, count in found.items() if count and key[0] != "ident.starts"}
+    assert not elsewhere, f"start names written outside the table of ident.starts: {elsewhere}"
+    assert all(found["ident.starts", name] == 1 for name in names), {name: found["ident.starts", name] for name in names}

@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from conftest import PROJECT_ROOT
-from ident.identification import ident, misfit
-from ident.solver import SLRAWarning
+from ident.identification import ident
+from ident.model_misfit import misfit
+from ident.solver import SLRAWarning, Status
 from ident.representations import make_ss, markov_parameters, random_system, simulate
 
 REFERENCE = PROJECT_ROOT / "reference"
@@ -134,7 +135,7 @@ def test_mass_spring_chain_exact_data() -> None:
     # level mixed in more, by BLAS kernel (1e-3 .. 2e-3 here, 0.4 reported elsewhere). ident now returns
     # the null space computed to the data's accuracy (starts.exact_kernel): 8.9e-4 on every kernel.
     sysh, info, wh, xini = ident(w, 1, 14, init="lra")  # the paper's start
-    assert info.converged and info.message.startswith("exact data: the null space of the data")
+    assert info.converged and info.status is Status.EXACT_NULL_SPACE and info.status.exact_data
     assert info.M / np.sum(w ** 2) < 1e-12  # reference: 6.66e-14 / 5.7e6, roundoff either way
     # cond(O_14) ~ 6e7: the misfit of the returned model must not go through a null space
     assert misfit(w, sysh)[0] / np.sum(w ** 2) < 1e-12
@@ -229,7 +230,7 @@ def test_nonconvergence_is_reported_and_warned() -> None:
     w = trajectory(sys, 200, rng) + 0.3 * rng.standard_normal((200, 2))
     with pytest.warns(SLRAWarning):
         _, info, _, _ = ident(w, 1, 3, maxiter=1)
-    assert not info.converged and info.iter == 1 and info.message
+    assert info.status is Status.MAXITER and not info.converged and info.iter == 1 and info.message
 
 
 @pytest.mark.parametrize("scale", [1e-4, 1e4])
@@ -325,7 +326,7 @@ def test_a_result_worse_than_the_model_y_0_is_not_converged(monkeypatch) -> None
     # calls it converged (a stand-in for one that stalls at a garbage point) at a kernel whose misfit
     # is far above ||y||^2, the misfit of the model y = 0; ident must report it as not converged.
     import dataclasses
-    from ident import identification
+    from ident import multistart
     true_system = random_system(1, 1, 3, np.random.default_rng(3))
     rng = np.random.default_rng(9)
     w = []
@@ -340,31 +341,33 @@ def test_a_result_worse_than_the_model_y_0_is_not_converged(monkeypatch) -> None
     # 29^2 ||y||^2, far above the bound whatever the rounding
     worse = make_ss(true_system.A, 30 * true_system.B, true_system.C, 30 * true_system.D)
     assert misfit(w, worse, exct=[0], wini=0)[0] > 100 * output_energy
-    solver = identification.slra
+    solver = multistart.slra
 
     def stops_at_the_start(*args, **kwargs):
         result = solver(*args, **{**kwargs, "maxiter": 0})
-        return dataclasses.replace(result, converged=True, message="stopped at the start (test)")
+        return dataclasses.replace(result, status=Status.NO_DECREASE, message="stopped at the start (test)")
 
-    monkeypatch.setattr(identification, "slra", stops_at_the_start)
+    monkeypatch.setattr(multistart, "slra", stops_at_the_start)
     with pytest.warns(SLRAWarning, match=r"above \|\|y\|\|\^2 = .*model y = 0") as caught:
         _, info, _, _ = ident(w, 1, 3, exct=[0], wini=0, sys0=worse)
     assert caught.pop(SLRAWarning).filename == __file__  # at the caller's line
-    assert info.M > output_energy and not info.converged and "model y = 0" in info.message
+    assert info.M > output_energy and info.status is Status.ABOVE_TRIVIAL and not info.converged
+    assert "model y = 0" in info.message  # with the bound, in words
     assert info.message.startswith("stopped at the start (test)")  # the solver's own account kept
     assert not info.candidates[0].converged
     # a converged result below the bound is left converged (the same stand-in, from the true system)
     with warnings.catch_warnings():
         warnings.simplefilter("error", SLRAWarning)
         _, below, _, _ = ident(w, 1, 3, exct=[0], wini=0, sys0=true_system)
-    assert below.converged and below.M < 0.1 * output_energy and below.message == "stopped at the start (test)"
+    assert below.status is Status.NO_DECREASE and below.converged and below.M < 0.1 * output_energy
+    assert below.message == "stopped at the start (test)"
     monkeypatch.undo()
     with warnings.catch_warnings():
         warnings.simplefilter("error", SLRAWarning)
         _, default, _, _ = ident(w, 1, 3, exct=[0], wini=0)  # the real solver from the default starts
     assert default.converged and default.M < 0.1 * output_energy
     # the bound is that of the model y = 0 only where that model is a candidate
-    from ident.identification import trivial_misfit
+    from ident.multistart import trivial_misfit
     assert trivial_misfit(w, [None, None], 1, (0,)) == pytest.approx(output_energy, rel=1e-12)
     assert trivial_misfit(w, [None, None], 1, (1,)) == np.inf  # an exact output: y = 0 cannot match it
     assert trivial_misfit(w, [np.ones((3, 2)), None], 1, ()) == np.inf  # given initial outputs not zero

@@ -18,8 +18,9 @@ from ident.batch import checked_executor
 from ident.daisy import dataset, load, table1
 from ident.data_forms import checked_options
 from ident.executors import TasksInterrupted, portable, restored, run_tasks
-from ident.identification import Candidate as IdentCandidate
-from ident.identification import IdentInfo, checked_init, ident
+from ident.identification import IdentInfo, ident
+from ident.multistart import Candidate as IdentCandidate
+from ident.multistart import checked_init
 from ident.representations import kernel_to_ss, p_ell_condition
 from ident.solver.threads import one_blas_thread
 from ident.validation import Validation, split_for_validation, validate

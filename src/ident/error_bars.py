@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from ident.data_forms import as_series, checked_exact, checked_initial, in_variable_order, with_roles
-from ident.identification import IdentInfo, identification_problem, scale_exponent, scaled
+from ident.identification import IdentInfo
+from ident.problem import identification_problem, scale_exponent, scaled
 from ident.representations import is_state_space
 from ident.solver import kernel_misfit
 from ident.solver.optimiser import Chart

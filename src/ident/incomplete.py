@@ -13,6 +13,7 @@ import numpy as np
 from ident.representations import (inistate, kernel_to_ss, make_ss, normalize_kernel, observability_index,
                                    shared_inistate, simulate, ss_to_kernel)
 from ident.smoothing import InfeasibleError, smoothed_misfit
+from ident.solver import Status
 
 __all__ = ["kernel_solution", "weighted_misfit", "completed", "variable_weights", "weighted_smoothing",
            "model_weighted_misfit", "chosen_weights"]
@@ -336,7 +337,8 @@ def refined_attempt(chosen, kinds, series, initial, m: int, ell: int, exponent: 
     p_hat = np.concatenate([x.T.ravel() for x in approximations])
     result = dataclasses.replace(
         chosen.result, R=kernel, p_hat=p_hat, misfit=misfit, iterations=chosen.result.iterations + fit.njev,
-        converged=chosen.result.converged and fit.status > 0,
+        status=(chosen.result.status if not chosen.result.converged else Status.CONVERGED if fit.status > 0
+                else Status.MAXITER),
         message=f"{chosen.result.message}; refined on the missing samples: {fit.message}")
     with np.errstate(under="ignore", over="ignore"):
         caller_misfit = float(np.ldexp(misfit, 2 * exponent))

@@ -9,10 +9,11 @@ import math
 import numpy as np
 
 from ident.data_forms import (as_series, checked_exact, checked_initial, checked_inputs_count, checked_options,
-                              checked_series, checked_tolerance, with_roles)
+                              checked_sample_time, checked_series, checked_tolerance, with_roles)
 from ident.affine import checked_affine
 from ident.frames import is_data_frame
-from ident.identification import check_inputs_present, checked_init, checked_sample_time, identification_rank
+from ident.multistart import checked_init
+from ident.problem import check_inputs_present, identification_rank
 
 __all__ = ["checked_lags", "checked_curve_arguments", "checked_validation", "lag_refusal", "CHOOSE_LAG_HOLDOUT"]
 

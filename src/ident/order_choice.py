@@ -12,9 +12,10 @@ import numpy as np
 
 from ident.data_complexity import checked_choice
 from ident.data_forms import as_series, checked_exact, checked_integer
-from ident.identification import ident, reduced_result
+from ident.identification import ident
 from ident.lag_arguments import CHOOSE_LAG_HOLDOUT, checked_curve_arguments, lag_refusal
 from ident.order_fit import ORDER_FITS
+from ident.reduced import reduced_result
 from ident.validation import LAG_FIT_POINTS, validate
 
 __all__ = ["OrderChoice", "choose_order", "checked_orders", "chosen_order", "SAME_MISFIT"]
