@@ -362,7 +362,7 @@ def compare(w, sys, *, inputs=None, outputs=None, offset=None, horizon=None, pas
 
 def model_data(w, sys, inputs=None, outputs=None, who: str = "compare") -> list[np.ndarray]:
     """The series of w, checked against a discrete-time model (inputs + outputs = q), in its order: a
-    DataFrame's columns matched with its signal names, its index's spacing with its dt (`11-identification.md`)."""
+    DataFrame's columns matched with its signal names, its index's spacing with its dt (`10c-data-and-roles.md`)."""
     if not is_state_space(sys) or not sys.isdtime(strict=True):
         raise TypeError(f"sys must be a discrete-time control.StateSpace, got {type(sys).__name__}")
     series, form = as_series(w, f"{who}: w")  # a simulation needs every sample: NaN is refused, naming `who`
