@@ -14,7 +14,7 @@ and from the least-squares kernel (`arx`), maxiter 500, tol 1e-5: 68 jobs. They 
 
 and the script checks that every result is bit for bit the result of the serial run, prints the
 times and their ratio, and writes them, with every job's size and time in the serial run, to
-benchmarks/bench_batch.json (read by literate/15-many-identifications.md). Timings on a machine
+benchmarks/bench_batch.json (read by literate/20-many-identifications.md). Timings on a machine
 shared with other work are noisy: the runs are side by side in one process so that their ratio is
 fair, `--rounds N` repeats all of them in turn (the ratios of every round and their median are
 written), and the load average is recorded before each round; each job's processor time is written

@@ -1,4 +1,4 @@
-"""Coverage of ident's error bars (issue 34, 24-uncertainty-and-stability.md), and their cost on DAISY. Not a test.
+"""Coverage of ident's error bars (issue 34, 30-uncertainty-and-stability.md), and their cost on DAISY. Not a test.
 
 Monte Carlo: for each of four settings (a second-order SISO plant and a 2x2 plant of order 2, each
 errors-in-variables and output error) RUNS records are simulated with a fresh white input and fresh

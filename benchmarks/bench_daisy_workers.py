@@ -8,7 +8,7 @@ set, mode and replay (102 jobs) through ident.executors. The two alternate, roun
 the best of the rounds of each is kept; the files of both runs are compared byte for byte. The load
 average before each run is recorded: a ratio measured while other work ran on the machine is not
 the ratio of a quiet one (the other work takes a share of the two cores from the cluster's workers).
-Writes benchmarks/results/daisy_workers.json, which 15-many-identifications.md reads.
+Writes benchmarks/results/daisy_workers.json, which 20-many-identifications.md reads.
 
 Usage: python benchmarks/bench_daisy_workers.py [--rounds=2] [--workers=2] [--sets=erie,dryer] [--out=FILE]
 """

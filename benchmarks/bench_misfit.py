@@ -6,7 +6,7 @@ A two-input two-output model of lag 2 (n = 4) on noisy data, errors-in-variables
 best of three runs, with the ratio to the previous T (10 means linear cost); then what costs more:
 10 % of the values missing at random (the factor is disturbed at every gap, so most samples are
 stepped one by one), and a model whose factor never settles (the paper's lag-14 chain model in
-output error: an eigenvalue at 1). Written to a JSON file that literate/12-misfit.md reads.
+output error: an eigenvalue at 1). Written to a JSON file that literate/16-misfit.md reads.
 Timings depend on the machine and its load; compare ratios measured in one run.
 """
 from __future__ import annotations

@@ -9,10 +9,10 @@ with its Jacobian, which is what an iteration of the refinement costs, for the m
 half of all values missing, errors-in-variables data do not determine a model (2 T observed values
 against the 2 T + n degrees of freedom of a trajectory: ident refuses them), so ident runs on data
 with half of the output values missing, and the evaluation is timed on both patterns;
-misfit() at 10 % missing against the complete data (the smoother of 12-misfit.md) and the
-saddle-point evaluation of 26-missing-data.md at 10 % missing; and the peak memory of ident at
+misfit() at 10 % missing against the complete data (the smoother of 16-misfit.md) and the
+saddle-point evaluation of 32-missing-data.md at 10 % missing; and the peak memory of ident at
 10 % missing for growing T, and of one evaluation of the refinement (T = 1e5 and 1e6), each in a
-fresh process. literate/26-missing-data.md reads the JSON.
+fresh process. literate/32-missing-data.md reads the JSON.
 Timings depend on the machine and its load; compare the ratios measured in one run.
 """
 from __future__ import annotations

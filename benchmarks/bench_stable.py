@@ -1,5 +1,5 @@
 """ident(..., stable=True) on the 17 DAISY sets of Table 1, both modes (issue 34,
-24-uncertainty-and-stability.md). Not a test.
+30-uncertainty-and-stability.md). Not a test.
 
 Protocol of bench_offset's "protocol" way: the record centred by its means, the first 70 % identifies,
 the rest validates (validate's simulation fit, the initial state by least squares), the runner's

@@ -1,4 +1,4 @@
-"""Is there a better stable model of DAISY's ball and beam? (issue 34, 24-uncertainty-and-stability.md).
+"""Is there a better stable model of DAISY's ball and beam? (issue 34, 30-uncertainty-and-stability.md).
 Not a test.
 
 The plant is unstable (unconstrained models of spectral radius about 1.03), and stable=True loses most of

@@ -1,4 +1,4 @@
-"""The published cases of identification from incomplete data (issue 29, point 6), for 26-missing-data.md.
+"""The published cases of identification from incomplete data (issue 29, point 6), for 32-missing-data.md.
 
     python benchmarks/missing_cases.py [--out benchmarks/results/missing_cases.json] [--runs 100]
 

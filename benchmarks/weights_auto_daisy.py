@@ -1,10 +1,10 @@
-"""weights="auto" measured on DAISY (issue 29), for 26-missing-data.md.
+"""weights="auto" measured on DAISY (issue 29), for 32-missing-data.md.
 
     python benchmarks/weights_auto_daisy.py [--sets NAME ...] [--budget SECONDS]
                                             [--out benchmarks/results/weights_auto_daisy.json]
 
 For every data set of Table 1 in both modes (OE: the inputs exact; EIV), by the protocol of the DAISY
-runner (14-daisy-runner.md: the data centred, the last 30 % held out for validation, ident's default
+runner (19-daisy-runner.md: the data centred, the last 30 % held out for validation, ident's default
 starts, maxiter 500, tol 1e-5, refine 1e-12): the validation fit (the mean over the outputs, as the
 table) of the model identified with raw weights (None) and with weights="std", and the choice that
 weights="auto" makes on the identification data (ident's own rule, ident.incomplete.chosen_weights,

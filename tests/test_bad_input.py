@@ -433,7 +433,7 @@ CASES += [
      ValueError, 'Offset.outputs must be a 1-D array of finite numbers, got shape \\(1, 1\\)'),
     ('Offset text', lambda: offset_of(1, 1).__class__(["a"], [1.0]),
      TypeError, 'Offset.inputs must hold real numbers'),
-    # --- missing samples and weights (issue 29, 26-missing-data.md) ---
+    # --- missing samples and weights (issue 29, 32-missing-data.md) ---
     ('nan in an exact variable', lambda: ident(W_WITH_NAN, 1, 1, exct=[1]),
      ValueError, 'ident: variable 1 is exact \\(exct\\) but is missing .* series 0 at sample 2 \\(the first of 1\\)'),
     ('a variable missing throughout', lambda: ident(np.where(np.arange(3) == 2, np.nan, W), 1, 1),
@@ -629,7 +629,7 @@ def test_infeasible_starts_are_reported_in_the_callers_terms(monkeypatch) -> Non
 def test_a_nearly_noncausal_model_is_returned_with_warnings_at_the_callers_line() -> None:
     # from the paper's start the kernel is singular (refused above); the other starts of "auto" creep
     # towards it and stop where P_ell is nearly singular and the model violently unstable, so the
-    # stability-constrained fit runs too (24-uncertainty-and-stability.md): ident says all of it, at the
+    # stability-constrained fit runs too (30-uncertainty-and-stability.md): ident says all of it, at the
     # caller's line (whether that fit reaches maxiter, an SLRAWarning, depends on the BLAS kernels'
     # rounding), and the candidates say why the paper's start gave nothing
     from ident.identification import UnstableModelWarning
@@ -1220,7 +1220,7 @@ def test_bad_options_of_the_lag_choice_are_refused_clearly(name, call, error, wo
     test_bad_input_is_refused_clearly(name, call, error, words)
 
 
-# ---- completion and forecasting (23-completion-and-forecasting.md) ----
+# ---- completion and forecasting (29-completion-and-forecasting.md) ----
 def _completion_system():
     return control.ss([[0.5, 0.2], [0.0, 0.3]], [[1.0], [0.5]], [[1.0, 0.0]], [[0.0]], 1)
 
@@ -1356,7 +1356,7 @@ def test_bad_options_of_the_error_bars_are_refused_clearly(name, call, error, wo
     test_bad_input_is_refused_clearly(name, call, error, words)
 
 
-# --- complexity from data (25-complexity.md): complexity and io_partitions ---
+# --- complexity from data (31-complexity.md): complexity and io_partitions ---
 from ident import complexity, io_partitions  # noqa: E402
 
 W_COMPLEXITY = np.random.default_rng(35).standard_normal((60, 2))
@@ -1398,7 +1398,7 @@ def test_bad_input_of_complexity_is_refused_clearly(name, call, error, words) ->
     test_bad_input_is_refused_clearly(name, call, error, words)
 
 
-# --- the order chosen from the data (25-complexity.md): choose_order ---
+# --- the order chosen from the data (31-complexity.md): choose_order ---
 from ident import choose_order  # noqa: E402
 
 W_ORDER = np.random.default_rng(36).standard_normal((120, 3))  # m = 1, p = 2: orders 1..4 at ell = 2
@@ -1440,7 +1440,7 @@ def test_bad_input_of_choose_order_is_refused_clearly(name, call, error, words) 
     test_bad_input_is_refused_clearly(name, call, error, words)
 
 
-# ---- the state prior of forecast (23-completion-and-forecasting.md, issue 33's robot arm) ----
+# ---- the state prior of forecast (29-completion-and-forecasting.md, issue 33's robot arm) ----
 def _state_prior_cases():
     from ident import StatePrior, forecast
     system, w = _completion_system(), _completion_data()

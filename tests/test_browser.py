@@ -299,7 +299,7 @@ def test_screenshots_at_desktop_and_phone_widths(woven, tmp_path_factory) -> Non
     folder = Path(os.environ.get("IDENT_SCREENSHOT_DIR") or tmp_path_factory.mktemp("screenshots"))
     folder.mkdir(parents=True, exist_ok=True)
     profile = tmp_path_factory.mktemp("chromium-screenshot-profile")
-    for name in ("index.html", "01-introduction.html", "04-daisy.html", "17-solver-inner-problem.html"):
+    for name in ("index.html", "01-introduction.html", "04-daisy.html", "23-solver-inner-problem.html"):
         for width in (1280, 500):
             target = folder / name.replace(".html", f"-{width}.png")
             done = chromium([f"--window-size={width},900", f"--screenshot={target}", (woven / name).as_uri()],

@@ -295,7 +295,7 @@ def test_inf_in_an_npz_array(tmp_path, capsys):
 
 
 def test_empty_fields_and_nan_are_missing_samples(data_csv, tmp_path, capsys):
-    """identify reads an empty CSV field or NaN as a missing sample (issue 29, 26-missing-data.md) where
+    """identify reads an empty CSV field or NaN as a missing sample (issue 29, 32-missing-data.md) where
     the model is identified; where it is validated by simulation, it refuses them, naming the row."""
     lines = data_csv.read_text().splitlines()
     lines[51] = ",".join(lines[51].split(",")[:2] + [""])  # data row 50: y empty
@@ -969,7 +969,7 @@ def test_lag_chooses_among_the_lags_it_can_judge_and_names_the_rest(data_csv, tm
     line = next(line for line in out.splitlines() if line.startswith("chosen lag (OE"))
     assert line.endswith("; lag 40 too long to judge on these data)") and " 40:" not in line, line
 
-# ---- complete and forecast (23-completion-and-forecasting.md) ----
+# ---- complete and forecast (29-completion-and-forecasting.md) ----
 @pytest.fixture
 def completion_files(data_csv, tmp_path, capsys):
     """A model identified from data_csv, a copy of its first 100 samples with gaps, a past and a future."""

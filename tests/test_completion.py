@@ -1,5 +1,5 @@
 """ident.completion and ident.data_driven: complete, forecast, the k-step predictor of compare, the
-data-driven completion and the input prior (23-completion-and-forecasting.md)."""
+data-driven completion and the input prior (29-completion-and-forecasting.md)."""
 from __future__ import annotations
 
 import warnings

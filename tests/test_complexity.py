@@ -1,4 +1,4 @@
-"""Complexity from data (25-complexity.md): (m, ell, n), the observability indices and the input sets
+"""Complexity from data (31-complexity.md): (m, ell, n), the observability indices and the input sets
 of exact trajectories of random systems of every class, and the noise-aware order."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""to_continuous (22-continuous-time.md): the zero-order-hold and Tustin inverses, round trips on
+"""to_continuous (28-continuous-time.md): the zero-order-hold and Tustin inverses, round trips on
 random models with repeated poles and integrators, and the chain of masses in continuous time."""
 from __future__ import annotations
 

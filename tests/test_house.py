@@ -14,6 +14,8 @@
   rules of length and of imports (issue 28); its parser and tangler import the standard library only
   (the tangler runs before anything is installed), the example runner that ``tests/test_examples.py``
   imports reaches neither the renderer nor the site, and the two programs at the root only start it.
+- The literate documents are numbered in reading order, 01, 02, ..., without letters, gaps or repeats,
+  and none is over 1,500 lines (issue 28): a longer one is two ideas.
 - Every random number comes from a seeded generator (``numpy.random.default_rng(seed)``): nothing in
   the package, the chapters, the tests or the benchmarks draws from numpy's global state, directly or
   through python-control's ``rss``/``drss`` (an example built on ``drss`` failed on one machine in CI).
@@ -262,3 +264,18 @@ def test_start_names_appear_in_one_table_only() -> None:
     elsewhere = {key: count for key, count in found.items() if count and key[0] != "ident.starts"}
     assert not elsewhere, f"start names written outside the table of ident.starts: {elsewhere}"
     assert all(found["ident.starts", name] == 1 for name in names), {name: found["ident.starts", name] for name in names}
+
+
+MAX_CHAPTER_LINES = 1500
+CHAPTERS = sorted((ROOT / "literate").glob("*.md"))
+
+
+def test_the_chapters_are_numbered_in_reading_order_without_letters() -> None:
+    numbers = [path.name.split("-", 1)[0] for path in CHAPTERS]
+    assert numbers == [f"{k:02d}" for k in range(1, len(CHAPTERS) + 1)], [path.name for path in CHAPTERS]
+
+
+@pytest.mark.parametrize("chapter", [path.name for path in CHAPTERS])
+def test_no_chapter_is_over_1500_lines(chapter: str) -> None:
+    n_lines = len((ROOT / "literate" / chapter).read_text(encoding="utf-8").splitlines())
+    assert n_lines <= MAX_CHAPTER_LINES, f"{chapter} has {n_lines} lines"

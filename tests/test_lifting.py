@@ -1,4 +1,4 @@
-"""The lifted start of ident for a periodic pattern of missing samples (26-missing-data.md)."""
+"""The lifted start of ident for a periodic pattern of missing samples (32-missing-data.md)."""
 from __future__ import annotations
 
 import warnings

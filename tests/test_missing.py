@@ -1,4 +1,4 @@
-"""Identification from incomplete data (issue 29, literate/26-missing-data.md): missing samples (NaN,
+"""Identification from incomplete data (issue 29, literate/32-missing-data.md): missing samples (NaN,
 masked entries) and element-wise weights in ident, against exact data, misfit() and a dense
 brute-force weighted projection."""
 from __future__ import annotations
@@ -125,7 +125,7 @@ def test_element_wise_weights_with_gaps_agree_with_the_brute_force_projection() 
 
 @pytest.mark.parametrize("s", [[2.0, 10.0, 0.5], [1.0, 1.0, 50.0], [1.0, 30.0, 0.2]])
 def test_weight_one_over_s_squared_is_scaling_by_s(s) -> None:
-    """The same minimum from two problems: refine's polish (20-solver-optimiser.md) takes both to it; the
+    """The same minimum from two problems: refine's polish (26-solver-optimiser.md) takes both to it; the
     cost alone fixed them only to about sqrt(eps) (at s = [1, 30, 0.2] the models were 2.5e-8 apart)."""
     rng = np.random.default_rng(15)
     system = random_system(1, 2, 1, rng)

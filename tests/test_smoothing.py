@@ -307,7 +307,7 @@ def test_exact_output_behind_unstable_zero_dynamics(monkeypatch) -> None:
 
 
 def test_ident_takes_missing_values_and_its_misfit_is_misfits() -> None:
-    """Since issue 29 ident takes NaN as a missing sample (26-missing-data.md): same misfit as misfit()."""
+    """Since issue 29 ident takes NaN as a missing sample (32-missing-data.md): same misfit as misfit()."""
     w = np.random.default_rng(17).standard_normal((50, 2))
     w[10, 1] = np.nan
     sysh, info, wh, _ = ident(w, 1, 1)

@@ -1,4 +1,4 @@
-"""Stable models when asked (issue 34, 24-uncertainty-and-stability.md): stable=True keeps the spectral
+"""Stable models when asked (issue 34, 30-uncertainty-and-stability.md): stable=True keeps the spectral
 radius within 1 - margin at a price reported in info.stability; with no stable candidate, ident
 chooses between the constrained fit and the unstable optimum by a hold-out."""
 from __future__ import annotations

@@ -56,7 +56,7 @@ def test_the_examples_run_without_shared_reference(tmp_path) -> None:
                            env=environment, capture_output=True, text=True, check=True)
     assert Path(where.stdout.strip()).is_relative_to(project / "src")  # the copy's ident, not this one's
     documents = documents_reading_data()
-    assert {"03-examples.md", "21-solver.md"} <= set(documents)  # the pattern still finds the readers
+    assert {"03-examples.md", "27-solver.md"} <= set(documents)  # the pattern still finds the readers
     run = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/test_examples.py",
                           "-k", " or ".join(documents)], cwd=project, env=environment, capture_output=True, text=True)
     summary = run.stdout.strip().splitlines()[-1] if run.stdout.strip() else ""

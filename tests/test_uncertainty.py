@@ -1,4 +1,4 @@
-"""Error bars of identified models (issue 34, 24-uncertainty-and-stability.md): the contract of
+"""Error bars of identified models (issue 34, 30-uncertainty-and-stability.md): the contract of
 info.uncertainty, the delta method against draws, the noise variance, and singular cases."""
 from __future__ import annotations
 

@@ -59,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
     demo_parser.add_argument("--seed", type=non_negative_integer, default=1,
                              help="seed of the random system and input (a non-negative integer)")
     demo_parser.set_defaults(handler=lambda args: print(demo(seed=args.seed)) or 0)
-    add_completion_commands(parser.commands)  # complete and forecast (23-completion-and-forecasting.md)
+    add_completion_commands(parser.commands)  # complete and forecast (29-completion-and-forecasting.md)
     return cli_main(argv, parser=parser)
 
 
