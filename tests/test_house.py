@@ -101,7 +101,12 @@ def test_the_solver_imports_nothing_of_the_system_theory() -> None:
             if imported not in reached:
                 reached.add(imported)
                 stack.append(imported)
-    assert reached - solver <= {"ident.structure", "ident.hankel", "ident.starts"}, reached - solver
+    assert reached - solver <= {"ident.structure", "ident.hankel", "ident.kernel_layout", "ident.starts"}, reached - solver
+
+
+def test_the_kernel_layout_is_the_ground_floor() -> None:
+    """``ident.kernel_layout`` (issue 28) imports nothing of ident: the solver and the starts may use it."""
+    assert GRAPH["ident.kernel_layout"] == set()
 
 
 def submitting_modules() -> set[str]:

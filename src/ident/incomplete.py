@@ -10,6 +10,7 @@ import dataclasses
 
 import numpy as np
 
+from ident.kernel_layout import p_ell_distance
 from ident.representations import (inistate, kernel_to_ss, make_ss, normalize_kernel, observability_index,
                                    shared_inistate, simulate, ss_to_kernel)
 from ident.smoothing import InfeasibleError, smoothed_misfit
@@ -326,9 +327,7 @@ def refined_attempt(chosen, kinds, series, initial, m: int, ell: int, exponent: 
     kernel, fit = refined_kernel(chosen.result.R, values, weights, maxiter, REFINE_TOL)
     if polish:
         kernel = polished(kernel, values, weights, series, kinds.weights, initial, m, ell)
-    n_vars = series[0].shape[1]
-    rows = np.linalg.qr(kernel.T)[0].T
-    distance = np.linalg.svd(rows[:, ell * n_vars + m:], compute_uv=False)[-1]
+    distance = p_ell_distance(kernel, m, ell)
     normal = normalize_kernel(kernel, m, ell, cond_warn=np.inf)
     model = kernel_to_ss(normal, m, ell, cond_warn=np.inf)
     A = np.asarray(model.A, dtype=float)

@@ -15,6 +15,7 @@ from ident.affine import identified_offset, start_kernel
 from ident.data_forms import Offset
 from ident.executors import run_tasks
 from ident.lifting import lifted_kernel
+from ident.kernel_layout import p_ell_distance
 from ident.problem import IdentificationProblem, all_samples
 from ident.representations import kernel_to_ss, normalize_kernel
 from ident.solver import IllConditionedKernelError, InfeasibleKernelError, SLRAResult, Status, slra
@@ -281,9 +282,7 @@ def identified_model(kernel, m: int, ell: int):
     """The kernel in the chart P_ell = I, the state-space model and kappa = 1 / sigma_min(P_ell) of the
     kernel with orthonormal rows, or an error in the caller's terms. Nothing is warned here: ident
     warns about the model it returns (a start it does not keep is no concern of the caller's)."""
-    n_vars = kernel.shape[1] // (ell + 1)
-    rows = np.linalg.qr(kernel.T)[0].T  # orthonormal rows: the same model, a scale-free P_ell
-    distance = np.linalg.svd(rows[:, ell * n_vars + m:], compute_uv=False)[-1]
+    distance = p_ell_distance(kernel, m, ell)  # orthonormal rows: the same model, a scale-free P_ell
     if distance <= P_ELL_ROUNDING:
         raise ValueError(f"the identified model cannot take the first m = {m} variables of w as its inputs: its "
                          f"kernel does not determine the outputs from them (P_ell is singular to within "

@@ -11,6 +11,7 @@ from functools import cached_property
 import numpy as np
 
 from ident.hankel import mosaic_hankel, time_major_permutation
+from ident.kernel_layout import hankel_rows
 
 __all__ = ["Structure", "series_to_parameters"]
 
@@ -147,12 +148,12 @@ class Structure:
     @cached_property
     def row_variable(self):
         """Variable of each variable-major Hankel row."""
-        return np.repeat(np.arange(self.n_vars), self.depths)
+        return hankel_rows(self.depths)[0]
 
     @cached_property
     def row_lag(self):
         """Lag of each variable-major Hankel row."""
-        return np.concatenate([np.arange(depth) for depth in self.depths])
+        return hankel_rows(self.depths)[1]
 
     # <<structure: the layout of p>>= literate/08-structure.md:398
     def n_samples(self, j, i):
