@@ -1532,3 +1532,29 @@ START_TABLE_CASES = [
 @pytest.mark.parametrize("name, call, error, words", START_TABLE_CASES, ids=[c[0] for c in START_TABLE_CASES])
 def test_bad_start_names_are_refused_with_the_tables_names(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# ------------------------------------------------------------------------------------------------
+# issue 28: the kernel's layout on the ground floor (ident.kernel_layout) names what it expected
+
+from ident import kernel_layout  # noqa: E402
+
+KERNEL_LAYOUT_CASES = [
+    ('a permutation of the wrong rows', lambda: kernel_layout.hankel_rows((2, 1), (0, 1, 3)),
+     ValueError, r"perm must be a permutation of range\(3\) \(the rows of depths \(2, 1\)\), got \[0, 1, 3\]"),
+    ('a repeated row', lambda: kernel_layout.hankel_rows((2, 2), (0, 1, 1, 2)),
+     ValueError, r"perm must be a permutation of range\(4\)"),
+    ('a kernel of the wrong width', lambda: kernel_layout.p_ell_distance(np.ones((1, 5)), 1, 1),
+     ValueError, r"R must be p x \(ell\+1\) q with p = q - m; got shape \(1, 5\) for m = 1, ell = 1"),
+    ('a kernel with too many rows', lambda: kernel_layout.p_ell_distance(np.ones((2, 4)), 1, 1),
+     ValueError, r"R must be p x \(ell\+1\) q with p = q - m; got shape \(2, 4\)"),
+    ('a kernel that is not a matrix', lambda: kernel_layout.p_ell_distance(np.ones(4), 1, 1),
+     ValueError, r"got shape \(4,\)"),
+    ('a kernel with NaN', lambda: kernel_layout.split_kernel(np.full((1, 4), np.nan), 1, 1),
+     ValueError, "R contains non-finite entries"),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", KERNEL_LAYOUT_CASES, ids=[c[0] for c in KERNEL_LAYOUT_CASES])
+def test_bad_arguments_of_the_kernel_layout_are_refused_clearly(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

@@ -10,7 +10,7 @@ import dataclasses
 
 import numpy as np
 
-from ident.kernel_layout import p_ell_distance
+from ident import kernel_layout
 from ident.representations import (inistate, kernel_to_ss, make_ss, normalize_kernel, observability_index,
                                    shared_inistate, simulate, ss_to_kernel)
 from ident.smoothing import InfeasibleError, smoothed_misfit
@@ -108,8 +108,7 @@ def kernel_jacobian(kernel, lam, wh, free_weights, free, missing, lu, rank, n_va
 
 def in_chart(kernel: np.ndarray) -> np.ndarray:
     """The kernel with R[:, -p:] = -I (P_ell = I: the outputs at lag ell)."""
-    p = kernel.shape[0]
-    return -np.linalg.solve(kernel[:, -p:], kernel)
+    return kernel_layout.in_chart(kernel)
 
 
 def weighted_misfit(kernel, values: list, weights: list):
@@ -327,7 +326,7 @@ def refined_attempt(chosen, kinds, series, initial, m: int, ell: int, exponent: 
     kernel, fit = refined_kernel(chosen.result.R, values, weights, maxiter, REFINE_TOL)
     if polish:
         kernel = polished(kernel, values, weights, series, kinds.weights, initial, m, ell)
-    distance = p_ell_distance(kernel, m, ell)
+    distance = kernel_layout.p_ell_distance(kernel, m, ell)
     normal = normalize_kernel(kernel, m, ell, cond_warn=np.inf)
     model = kernel_to_ss(normal, m, ell, cond_warn=np.inf)
     A = np.asarray(model.A, dtype=float)

@@ -10,6 +10,7 @@ import statistics
 
 import numpy as np
 
+from ident import kernel_layout
 from ident.caller import warn_at_caller
 from ident.representations import kernel_to_ss
 from ident.solver.cost import Problem
@@ -293,7 +294,7 @@ def with_parameters(kernel, theta, free=None) -> np.ndarray:
 
 def normalised(kernel) -> np.ndarray:
     """The same model's kernel with P_ell = I (R[:, -p:] = -I)."""
-    return np.linalg.solve(-kernel[:, kernel.shape[1] - kernel.shape[0]:], kernel)
+    return kernel_layout.in_chart(kernel)
 
 
 def polynomials_at(kernel, m: int, ell: int, z) -> tuple[np.ndarray, np.ndarray]:
