@@ -8,7 +8,7 @@ import dataclasses
 
 import numpy as np
 
-from ident import starts
+from ident import kernel_layout, starts
 from ident.data_forms import Offset, checked_offset
 from ident.structure import Structure
 
@@ -68,7 +68,7 @@ def identified_offset(R: np.ndarray, kernel: np.ndarray, m: int, ell: int, input
     chart P_ell = I is `kernel`: inputs u0 = input_levels, outputs y0 from P(1) y0 = Q(1) u0 + c0."""
     n_outputs, n_columns = kernel.shape
     n_vars = n_columns // (ell + 1)
-    constant = -np.linalg.solve(R[:, 1 + ell * n_vars + m:], R[:, 0])  # c0 in the chart P_ell = I
+    constant = kernel_layout.in_chart(R)[:, 0]  # c0 in the chart P_ell = I
     gains = kernel.reshape(n_outputs, ell + 1, n_vars).sum(axis=1)  # R(1) = [Q(1) -P(1)]
     at_one = -gains[:, m:]
     smallest = np.linalg.svd(at_one, compute_uv=False)[-1]
