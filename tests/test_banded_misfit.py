@@ -8,7 +8,7 @@ import pytest
 import ident.smoothing as smoothing
 from ident import misfit
 from ident.banded_misfit import BANDED_FROM, banded_solution, gap_kernel
-from ident.incomplete import in_chart, kernel_solution
+from ident.incomplete import in_chart, sparse_solution
 from ident.representations import make_ss, random_system, simulate, ss_to_kernel
 from ident.smoothing import smoothed_misfit
 
@@ -64,7 +64,7 @@ def test_the_banded_system_answers_as_the_smoother_on_random_gaps(m, p, ell, kin
     assert banded_answers == [True]
     size = np.abs(w).max()
     assert abs(M - smoothed.misfit) <= 1e-8 * smoothed.misfit
-    sparse = kernel_solution(in_chart(ss_to_kernel(model, ell)), np.nan_to_num(gappy), np.where(np.isnan(gappy), 0.0, 1.0))
+    sparse = sparse_solution(in_chart(ss_to_kernel(model, ell)), np.nan_to_num(gappy), np.where(np.isnan(gappy), 0.0, 1.0))
     assert abs(M - np.sum(sparse.residuals ** 2)) <= 1e-10 * M
     assert np.abs(wh - smoothed.trajectories[0]).max() <= 1e-10 * size
     assert np.abs(xini - smoothed.initial_states).max() <= 1e-8 * max(np.abs(smoothed.initial_states).max(), 1.0)
@@ -107,20 +107,23 @@ def test_exact_variables_and_initial_conditions_keep_the_smoother(options, bande
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_the_banded_system_solves_the_sparse_saddle_point_system(seed) -> None:
-    """Random weights, zeros (missing) and infinities (exact) included: the same residuals and wh as the
-    sparse system of kernel_solution."""
+    """Random weights, zeros (missing) and infinities (exact) included: the same residuals, wh and
+    Jacobian as the sparse system."""
     model, w, rng = noisy_series(2, 2, 2, 400, 0.1, 10 + seed)
     weights = rng.uniform(0.2, 5.0, w.shape)
     weights[rng.random(w.shape) < 0.15] = 0.0
     weights[:, 0][rng.random(len(w)) < 0.2] = np.inf
     values = np.where(weights == 0, 0.0, w)
     kernel = in_chart(ss_to_kernel(model, 2))
-    sparse = kernel_solution(kernel, values, weights)
-    residuals, wh = banded_solution(kernel, values, weights)
+    sparse = sparse_solution(kernel, values, weights, jacobian=True)
+    found = banded_solution(kernel, values, weights, jacobian=True)
+    residuals, wh = found.residuals, found.approximation
     assert abs(np.sum(residuals ** 2) - np.sum(sparse.residuals ** 2)) <= 1e-10 * np.sum(sparse.residuals ** 2)
     assert np.abs(wh - sparse.approximation).max() <= 1e-10 * np.abs(w).max()
     exact = np.isinf(weights)
     assert np.abs(wh[exact] - w[exact]).max() <= 1e-14 * np.abs(w).max()
+    assert found.jacobian.shape == sparse.jacobian.shape == (np.sum((weights > 0) & ~exact), 20)
+    assert np.abs(found.jacobian - sparse.jacobian).max() <= 1e-10 * np.abs(sparse.jacobian).max()
 
 
 def test_the_banded_system_is_least_squares_over_the_trajectories() -> None:
@@ -141,7 +144,8 @@ def test_the_banded_system_is_least_squares_over_the_trajectories() -> None:
     coefficients = np.linalg.lstsq(basis[seen], w.ravel()[seen], rcond=None)[0]
     expected_wh = (basis @ coefficients).reshape(w.shape)
     expected_M = np.sum((w.ravel()[seen] - (basis @ coefficients)[seen]) ** 2)
-    residuals, wh = banded_solution(gap_kernel(A, B, C, D)[0], np.where(gaps, 0.0, w), np.where(gaps, 0.0, 1.0))
+    found = banded_solution(gap_kernel(A, B, C, D)[0], np.where(gaps, 0.0, w), np.where(gaps, 0.0, 1.0))
+    residuals, wh = found.residuals, found.approximation
     assert abs(np.sum(residuals ** 2) - expected_M) <= 1e-10 * expected_M
     assert np.abs(wh - expected_wh).max() <= 1e-10 * np.abs(w).max()
 

@@ -10,6 +10,7 @@ import dataclasses
 
 import numpy as np
 
+from ident.banded_misfit import banded_solution
 from ident.representations import (inistate, kernel_to_ss, make_ss, normalize_kernel, observability_index,
                                    shared_inistate, simulate, ss_to_kernel)
 from ident.smoothing import InfeasibleError, smoothed_misfit
@@ -43,8 +44,18 @@ def kernel_matrix(kernel: np.ndarray, n_samples: int, n_vars: int):
 def kernel_solution(kernel: np.ndarray, values: np.ndarray, weights: np.ndarray,
                     jacobian: bool = False) -> KernelSolution:
     """min sum v (w - wh)^2 over the free values (0 < v < inf) subject to R H(wh) = 0, missing values
-    (v = 0) free and exact ones (v = inf) kept: the augmented system in (Delta, z, lambda) of the text,
-    its unknowns in time order (banded), factorised once."""
+    (v = 0) free and exact ones (v = inf) kept: by the banded system in (lambda, z) with one LU in
+    LAPACK (banded_misfit.py), or the sparse one where that LU meets a zero pivot."""
+    found = banded_solution(kernel, values, weights, jacobian)
+    if found is not None:
+        return KernelSolution(found.residuals, found.approximation, found.jacobian)
+    return sparse_solution(kernel, values, weights, jacobian)
+
+
+def sparse_solution(kernel: np.ndarray, values: np.ndarray, weights: np.ndarray,
+                    jacobian: bool = False) -> KernelSolution:
+    """kernel_solution by the augmented system in (Delta, z, lambda) of the text, its unknowns in time
+    order (banded), factorised once by SuperLU."""
     import scipy.sparse.linalg  # on first use: import ident stays as quick as numpy and scipy.linalg
     p, width = kernel.shape
     n_samples, n_vars = values.shape
