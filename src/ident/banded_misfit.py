@@ -12,6 +12,7 @@ import numpy as np
 from scipy.linalg import lapack
 
 from ident.representations import make_ss, observability_index, observability_matrix, shared_inistate, ss_to_kernel
+from ident.solver.threads import one_blas_thread
 
 __all__ = ["gap_kernel", "wants_banded", "banded_solution", "gappy_misfit"]
 
@@ -112,6 +113,12 @@ def banded_solution(kernel: np.ndarray, values: np.ndarray, weights: np.ndarray,
     """min sum v (w - wh)^2 over the free values (0 < v < inf) subject to R H(wh) = 0, the missing values
     (v = 0) free and the exact ones (v = inf) kept, by the banded system of the text; with the
     Jacobian of the residuals in R[:, :-p] if asked. None where the LU meets a zero pivot."""
+    with one_blas_thread():  # small products: the machine's other threads only cost synchronisation
+        return banded_solved(kernel, values, weights, jacobian)
+
+
+def banded_solved(kernel: np.ndarray, values: np.ndarray, weights: np.ndarray, jacobian: bool):
+    """banded_solution, on one BLAS thread."""
     p, width = kernel.shape
     n_samples, q = values.shape
     ell = width // q - 1
