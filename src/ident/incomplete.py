@@ -142,9 +142,12 @@ def refined_kernel(kernel0, values: list, weights: list, maxiter: int, tol: floa
             last[key] = [kernel_solution(kernel, w, v, jacobian=True) for w, v in zip(values, weights)]
         return last[key]
 
+    def stacked(pieces: list) -> np.ndarray:  # one series: its array itself, not a copy (T q x 20 at most)
+        return pieces[0] if len(pieces) == 1 else np.concatenate(pieces)
+
     result = scipy.optimize.least_squares(
-        lambda theta: np.concatenate([s.residuals for s in solutions(theta)]), theta0,
-        jac=lambda theta: np.vstack([s.jacobian for s in solutions(theta)]), method="lm",
+        lambda theta: stacked([s.residuals for s in solutions(theta)]), theta0,
+        jac=lambda theta: stacked([s.jacobian for s in solutions(theta)]), method="lm",
         xtol=tol, ftol=tol, gtol=tol, max_nfev=max(maxiter, 1))
     return np.hstack([result.x.reshape(p, -1), -np.eye(p)]), result
 
