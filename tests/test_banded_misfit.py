@@ -168,3 +168,36 @@ def test_the_smoother_leaves_the_callers_matrices_alone() -> None:
     assert all(np.array_equal(M, M0) for M, M0 in zip((A, B, C, D), before))
     model = make_ss(A, B, C, D)
     assert np.array_equal(np.asarray(model.A), before[0])
+
+
+def test_missing_values_the_data_barely_determine_go_to_the_smoother(banded_answers) -> None:
+    """Half of all values missing in errors-in-variables data: the ridge's solves do not settle."""
+    model, w, rng = noisy_series(2, 2, 2, BANDED_FROM, 0.1, 11)
+    gappy = np.where(rng.random(w.shape) < 0.5, np.nan, w)
+    A, B, C, D = (np.asarray(getattr(model, x), dtype=float) for x in "ABCD")
+    found = banded_solution(gap_kernel(A, B, C, D)[0], np.nan_to_num(gappy), np.where(np.isnan(gappy), 0.0, 1.0))
+    assert not found.settled
+    M, _, _ = misfit(gappy, model)
+    assert banded_answers == [False]
+    assert abs(M - smoothed_misfit(A, B, C, D, [gappy], banded=False).misfit) <= 1e-12 * M
+
+
+def test_kernel_solution_falls_back_to_the_sparse_system_on_a_zero_pivot(monkeypatch) -> None:
+    import ident.banded_misfit as banded_misfit
+    from ident.incomplete import kernel_solution
+
+    model, w, rng = noisy_series(2, 2, 2, 300, 0.1, 12)
+    weights = np.where(rng.random(w.shape) < 0.1, 0.0, 1.0)
+    values, kernel = np.where(weights == 0, 0.0, w), in_chart(ss_to_kernel(model, 2))
+    expected = sparse_solution(kernel, values, weights, jacobian=True)
+    real = banded_misfit.lapack.dgbtrf
+
+    def singular(*args, **kwargs):
+        lu, pivots, _ = real(*args, **kwargs)
+        return lu, pivots, 1  # as LAPACK reports U(1, 1) = 0
+
+    monkeypatch.setattr(banded_misfit.lapack, "dgbtrf", singular)
+    assert banded_solution(kernel, values, weights) is None
+    found = kernel_solution(kernel, values, weights, jacobian=True)
+    assert np.abs(found.residuals - expected.residuals).max() <= 1e-14 * np.abs(expected.residuals).max()
+    assert np.abs(found.jacobian - expected.jacobian).max() <= 1e-14 * np.abs(expected.jacobian).max()
