@@ -50,9 +50,8 @@ def saddle_band(blocks: np.ndarray, inv_v: np.ndarray, gaps: tuple, lam_start: n
                 ridge: float) -> tuple[np.ndarray, int]:
     """The matrix of the text in LAPACK's band storage for dgbtrf (its top third free for the fill of
     the pivoting), and its half-bandwidth."""
-    ell, p, q = blocks.shape
-    ell -= 1
-    n_windows = len(lam_start)
+    n_lags, p, q = blocks.shape
+    ell, n_windows = n_lags - 1, len(lam_start)
     sample, variable = gaps
     within = np.arange(p)
     reach = [(sample - k, (sample - k >= 0) & (sample - k < n_windows)) for k in range(ell + 1)]
@@ -89,13 +88,13 @@ class BandedSolution:
 
     residuals: np.ndarray  # sqrt(v) (w - wh) at the free values, time-major
     approximation: np.ndarray  # wh, (T, q)
-    settled: bool  # the ridge's solves settled: every missing value is determined by the data
+    settled: bool  # the ridge's solves settled: no missing value that the data barely determine
     jacobian: np.ndarray | None = None  # d residuals / d R[:, :-p]
 
 
 def slots(missing: np.ndarray, p: int, ell: int):
-    """The place of every unknown: lambda_t at lam_at[t] (p of them), the missing value i at z_at[i]
-    (in the order of np.nonzero(missing)); slot s holds the window s - ell // 2, then the gaps of s."""
+    """Where the unknowns go: the p multipliers of window t from lam_start[t] on, the missing value i
+    (in the order of np.nonzero(missing)) at z_at[i]; slot s holds window s - ell // 2, then the gaps of s."""
     n_samples = len(missing)
     n_windows = n_samples - ell
     sample = np.nonzero(missing)[0]
