@@ -5,12 +5,14 @@
 A two-input two-output model of lag 2 (n = 4) on noisy data (errors-in-variables, noise 0.1),
 T = 1e5: ident on the complete data and on the data with 50 % of the values missing at random
 (the time per iteration: the solver's for the complete data, one evaluation of the exact misfit
-with its Jacobian, which is what an iteration of the refinement costs, for the missing data). With
+with its Jacobian, which is what an iteration of the refinement costs, for the missing data, by the
+banded system that ident uses and by the sparse one it used before). With
 half of all values missing, errors-in-variables data do not determine a model (2 T observed values
 against the 2 T + n degrees of freedom of a trajectory: ident refuses them), so ident runs on data
 with half of the output values missing, and the evaluation is timed on both patterns;
-misfit() at 10 % missing against the complete data (the smoother of 16-misfit.md) and the
-saddle-point evaluation of 32-missing-data.md at 10 % missing; and the peak memory of ident at
+misfit() at 10 % missing against the complete data (the banded system of 32-missing-data.md, which
+answers for the smoother of 16-misfit.md there), the smoother itself and the sparse saddle-point
+evaluation at 10 % missing; and the peak memory of ident at
 10 % missing for growing T, and of one evaluation of the refinement (T = 1e5 and 1e6), each in a
 fresh process. literate/32-missing-data.md reads the JSON.
 Timings depend on the machine and its load; compare the ratios measured in one run.
@@ -29,8 +31,9 @@ from pathlib import Path
 import numpy as np
 
 from ident import ident, misfit
-from ident.incomplete import in_chart, kernel_solution, weighted_misfit
+from ident.incomplete import in_chart, kernel_solution, sparse_solution
 from ident.representations import random_system, simulate, ss_to_kernel
+from ident.smoothing import smoothed_misfit
 
 
 def timed(call):
@@ -51,12 +54,18 @@ def with_gaps(w, fraction: float, rng) -> np.ndarray:
     return np.where(rng.random(w.shape) < fraction, np.nan, w)
 
 
+PEAK = ("import re, resource; peak = lambda: float(re.search(r'VmHWM:\\s+(\\d+)', open('/proc/self/status').read()).group(1)) "
+        "/ 1024 if __import__('os').path.exists('/proc/self/status') else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024; ")
+# VmHWM, the peak of the process's own memory: ru_maxrss would carry the parent's resident memory over
+# the fork and the exec into the child (this script holds about 1 GiB when it starts the children)
+
+
 def peak_memory(n_samples: int) -> dict:
     """ident at 10 % missing in a fresh process: its peak resident memory (MiB) and time."""
-    code = ("import resource, time, numpy as np, sys; sys.path.insert(0, %r); import bench_missing as b; "
+    code = (PEAK + "import time, numpy as np, sys; sys.path.insert(0, %r); import bench_missing as b; "
             "model, w, rng = b.noisy_data(%d); w = b.with_gaps(w, 0.1, rng); "
             "from ident import ident; s = time.perf_counter(); ident(w, 2, 2, init='lra'); "
-            "print(time.perf_counter() - s, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)"
+            "print(time.perf_counter() - s, peak())"
             % (str(Path(__file__).parent), n_samples))
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     return {"T": n_samples, "seconds": float(out[0]), "peak_MiB": float(out[1])}
@@ -65,11 +74,11 @@ def peak_memory(n_samples: int) -> dict:
 def evaluation_memory(n_samples: int) -> dict:
     """One evaluation of the exact misfit with its Jacobian (an iteration of the refinement) at 10 %
     missing, in a fresh process: its peak resident memory (MiB) and time."""
-    code = ("import resource, time, numpy as np, sys; sys.path.insert(0, %r); import bench_missing as b; "
+    code = (PEAK + "import time, numpy as np, sys; sys.path.insert(0, %r); import bench_missing as b; "
             "from ident.incomplete import in_chart, kernel_solution; from ident.representations import ss_to_kernel; "
             "model, w, rng = b.noisy_data(%d); w = b.with_gaps(w, 0.1, rng); kernel = in_chart(ss_to_kernel(model, 2)); "
             "s = time.perf_counter(); kernel_solution(kernel, np.nan_to_num(w), np.where(np.isnan(w), 0.0, 1.0), "
-            "jacobian=True); print(time.perf_counter() - s, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)"
+            "jacobian=True); print(time.perf_counter() - s, peak())"
             % (str(Path(__file__).parent), n_samples))
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     return {"T": n_samples, "seconds": float(out[0]), "peak_MiB": float(out[1])}
@@ -105,20 +114,28 @@ def main() -> None:
     for name, data in (("outputs", half_outputs), ("all", half)):
         values, weights = np.nan_to_num(data), np.where(np.isnan(data), 0.0, 1.0)
         evaluations[name] = timed(lambda: kernel_solution(kernel, values, weights, jacobian=True))[0]
+        evaluations[name + "_sparse"] = timed(lambda: sparse_solution(kernel, values, weights, jacobian=True))[0]
     record["missing_50"] = {"seconds": seconds, "iterations": info_half.iter, "message": info_half.message,
-                            "per_iteration": evaluations["outputs"], "per_iteration_all": evaluations["all"]}
+                            "per_iteration": evaluations["outputs"], "per_iteration_all": evaluations["all"],
+                            "per_iteration_sparse": evaluations["outputs_sparse"],
+                            "per_iteration_all_sparse": evaluations["all_sparse"]}
     record["per_iteration_ratio"] = evaluations["outputs"] / record["complete"]["per_iteration"]
     record["per_iteration_ratio_all"] = evaluations["all"] / record["complete"]["per_iteration"]
+    record["per_iteration_ratio_sparse"] = evaluations["outputs_sparse"] / record["complete"]["per_iteration"]
     record["total_ratio"] = record["missing_50"]["seconds"] / record["complete"]["seconds"]
 
     complete_misfit, _ = timed(lambda: misfit(w, sysh))
     gappy_misfit, (M, _, _) = timed(lambda: misfit(tenth, sysh))
+    matrices = [np.asarray(getattr(sysh, x), dtype=float) for x in "ABCD"]
+    smoother, smoothed = timed(lambda: smoothed_misfit(*matrices, [tenth], banded=False))
     kernel = in_chart(ss_to_kernel(sysh, 2))
-    saddle, (M_saddle, _) = timed(lambda: weighted_misfit(kernel, [np.nan_to_num(tenth)],
-                                                          [np.where(np.isnan(tenth), 0.0, 1.0)]))
+    saddle, sparse = timed(lambda: sparse_solution(kernel, np.nan_to_num(tenth), np.where(np.isnan(tenth), 0.0, 1.0)))
+    M_saddle = float(np.sum(sparse.residuals ** 2))
     record["misfit"] = {"complete": complete_misfit, "missing_10": gappy_misfit, "ratio": gappy_misfit / complete_misfit,
+                        "smoother_missing_10": smoother, "smoother_ratio": smoother / complete_misfit,
                         "saddle_point_missing_10": saddle, "saddle_point_ratio": saddle / complete_misfit,
-                        "relative_difference": abs(M - M_saddle) / M}
+                        "relative_difference": abs(M - M_saddle) / M,
+                        "smoother_relative_difference": abs(M - smoothed.misfit) / M}
     record["memory"] = [peak_memory(size) for size in args.memory_sizes]
     record["evaluation_memory"] = [evaluation_memory(size) for size in args.evaluation_sizes]
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
