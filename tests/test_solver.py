@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from ident.solver import InfeasibleKernelError, SLRAWarning, Status, kernel_misfit, slra
-from ident.solver import gauss_newton
+from ident.solver.fast import gauss_newton
 from ident.solver.blocked import banded_solve
 from ident.solver.cost import Problem
 from ident.solver.factor import CholeskyFactor, Shortcut, factor_band

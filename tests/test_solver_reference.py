@@ -1,4 +1,4 @@
-"""The contract of the solver's fast path (ident.solver.gauss_newton with the factor's stationary
+"""The contract of the solver's fast path (ident.solver.fast, with the factor's stationary
 shortcut): on a bed of problems, its cost, J^T J, J^T e and half Hessian equal those of the plain
 algorithm (ident.solver.reference) to 1e-12 of their size, or to the rounding that the conditioning of
 Gamma allows where that is larger.
@@ -9,6 +9,9 @@ of one length), the bases of whole stationary blocks made from their sources (sm
 free responses (a switch before they decay), weights that vary in time (no shortcut), exact
 variables, depths 1 to 4, tiny series and a nearly singular Gamma.
 """
+import ast
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.linalg
@@ -199,3 +202,22 @@ def test_fast_path_equals_the_plain_algorithm(name):
     for what, fast, plain in zip(("J^T J", "J^T e", "Hessian"), (jtj, half_gradient, half_hessian), reference[1:]):
         errors[what] = np.abs(fast - plain).max() / np.abs(plain).max()
     assert max(errors.values()) <= tolerance, f"{errors} above {tolerance:.1e}"
+
+
+def test_the_fast_path_is_reached_through_one_dispatch_point():
+    # the plain solver imports ident.solver.fast in one place only (Problem.normal_equations's module),
+    # and the fast path imports none of the modules that reach it
+    solver = Path(__file__).resolve().parents[1] / "src" / "ident" / "solver"
+    importers = set()
+    for path in solver.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([node.module or ""] + [f"{node.module}.{alias.name}" for alias in node.names]
+                     if isinstance(node, ast.ImportFrom) else
+                     [alias.name for alias in node.names] if isinstance(node, ast.Import) else [])
+            module = ".".join(path.relative_to(solver.parent).with_suffix("").parts)
+            if any(name == "ident.solver.fast" or name.startswith("ident.solver.fast.") for name in names):
+                importers.add(module)
+            if "fast" in path.parts:
+                assert not any(name in ("ident.solver.cost", "ident.solver") or name.startswith("ident.solver.cost")
+                               for name in names), f"{module} imports back what reaches it: {names}"
+    assert {m for m in importers if not m.startswith("solver.fast")} == {"solver.cost"}
