@@ -621,12 +621,8 @@ def test_an_ill_conditioned_factor_is_stationary_to_its_rounding_level():
     # two nearly dependent kernel rows: the factor's rows scatter around the stationary one by about
     # kappa eps, above the setting's tolerance; taken as stationary at that level, the cost and the
     # Gauss-Newton matrix agree with those of the factor computed in full to a few hundred kappa eps
-    rng = np.random.default_rng(7)
-    n_samples, q = 6000, 8
-    structure = Structure.time_major(q, 1, [n_samples - 1])
-    p = structure.params_from_series([rng.standard_normal((n_samples, q))])
-    R = rng.standard_normal((4, 2 * q))
-    R[3] = R[2] + 0.01 * rng.standard_normal(2 * q)
+    from test_solver_reference import ill_conditioned
+    p, structure, R, _ = ill_conditioned()
     shortcut_state = Problem(p, structure).evaluate(R)
     full_state = Problem(p, structure, shortcut=Shortcut(enabled=False)).evaluate(R)
     (factor,) = shortcut_state.factors
