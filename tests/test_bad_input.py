@@ -1558,3 +1558,25 @@ KERNEL_LAYOUT_CASES = [
 @pytest.mark.parametrize("name, call, error, words", KERNEL_LAYOUT_CASES, ids=[c[0] for c in KERNEL_LAYOUT_CASES])
 def test_bad_arguments_of_the_kernel_layout_are_refused_clearly(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# issue 28: the plain Gauss-Newton matrix (ident.solver.reference) names its argument
+
+from ident.solver.reference import gauss_newton_reference  # noqa: E402
+
+_PLAIN = Structure.time_major(2, 1, [5])
+PLAIN_REFERENCE_CASES = [
+    ('a kernel of the wrong width', lambda: gauss_newton_reference(np.zeros(12), _PLAIN, np.ones((1, 3)), [0, 1]),
+     ValueError, r'kernel must be g x 4 with g < 4, got shape \(1, 3\)'),
+    ('a square kernel', lambda: gauss_newton_reference(np.zeros(12), _PLAIN, np.eye(4), []),
+     ValueError, r'kernel must be g x 4 with g < 4, got shape \(4, 4\)'),
+    ('a free column out of range', lambda: gauss_newton_reference(np.zeros(12), _PLAIN, np.ones((1, 4)), [0, 4]),
+     ValueError, r'free must be distinct column indices of the kernel in 0 \.\. 3'),
+    ('a repeated free column', lambda: gauss_newton_reference(np.zeros(12), _PLAIN, np.ones((1, 4)), [1, 1]),
+     ValueError, 'free must be distinct column indices'),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", PLAIN_REFERENCE_CASES, ids=[c[0] for c in PLAIN_REFERENCE_CASES])
+def test_bad_arguments_of_the_plain_gauss_newton_matrix_are_refused(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from ident.solver import InfeasibleKernelError, SLRAWarning, Status, kernel_misfit, slra
-from ident.solver import gauss_newton
+from ident.solver.fast import gauss_newton
 from ident.solver.blocked import banded_solve
 from ident.solver.cost import Problem
 from ident.solver.factor import CholeskyFactor, Shortcut, factor_band
@@ -491,125 +491,19 @@ def test_exact_hessian_matches_central_differences_of_the_gradient(weights, make
     assert np.abs(2 * half_hessian - numerical).max() < 1e-6 * np.abs(numerical).max()
 
 
-def test_delayed_bases_agree_with_all_right_hand_sides(monkeypatch):
-    # long series with constant weights: the factor becomes stationary and the solver switches to the
-    # delayed bases; with the shortcut off it never does. Variable 3 is fixed: no c-bases for it.
-    rng = np.random.default_rng(7)
-    w = simulate(rng, 2, 2, 4, 3000)
-    structure = Structure.time_major(4, 2, [2998, 1500])
-    weights = np.ones(structure.n_params)
-    for samples_j in structure.split(weights):
-        samples_j[3][:] = np.inf
-    structure = Structure(structure.depths, structure.n_cols, structure.perm, weights)
-    p = structure.params_from_series([w, w[:1502] + 0.1 * rng.standard_normal((1502, 4))])
-    R = initial_kernel(p, structure, 10)
-    free = Chart.from_kernel(R).free_columns
+def test_long_series_take_the_delayed_bases(monkeypatch):
+    # a performance guard, not a check of the numbers (tests/test_solver_reference.py holds the fast
+    # path's contract): on a long series with constant weights the solver must switch to the delayed
+    # bases once the factor is stationary; without them every right-hand side is solved over every row,
+    # about six times the time of the Gauss-Newton matrix here, and no result would show it
+    from test_solver_reference import delayed_bases
+    p, structure, R, _ = delayed_bases()
     problem = Problem(p, structure)
     calls = []
     original = gauss_newton.delayed_products
     monkeypatch.setattr(gauss_newton, "delayed_products", lambda *a: calls.append(1) or original(*a))
-    delayed = problem.normal_equations(problem.evaluate(R), free)
-    assert calls, "the delayed bases were not used"
-    calls.clear()
-    full = Problem(p, structure, shortcut=Shortcut(enabled=False))
-    solved = full.normal_equations(full.evaluate(R), free)
-    assert not calls
-    for a, b in zip(delayed, solved):
-        assert np.abs(a - b).max() < 1e-11 * np.abs(b).max()
-
-
-def test_delayed_products_of_a_batch_in_the_solvers_layout(monkeypatch):
-    # many series of one length share their factor and are solved a batch at a time; once their free
-    # responses have decayed, the delayed products are taken in the solver's layout (the series end to
-    # end, less the products across their ends, and the rows at either end per series): the same
-    # matrices as with every right-hand side solved over every row (the shortcut off).
-    rng = np.random.default_rng(5)
-    n_series, n_samples = 40, 600
-    w = simulate(rng, 2, 2, 4, n_series * n_samples)
-    series = [w[k * n_samples: (k + 1) * n_samples] + 0.1 * rng.standard_normal((n_samples, 4))
-              for k in range(n_series)]
-    structure = Structure.time_major(4, 2, [n_samples - 2] * n_series)
-    p = structure.params_from_series(series)
-    calls = []
-    original = gauss_newton.delayed_products_by_series
-    monkeypatch.setattr(gauss_newton, "delayed_products_by_series", lambda *a: calls.append(1) or original(*a))
-    assert_gauss_newton_as_solved_in_full(p, structure, initial_kernel(p, structure, 10))
-    assert calls, "the batch's delayed products were not taken in the solver's layout"
-
-
-def assert_gauss_newton_as_solved_in_full(p, structure, R, **options):
-    """The Gauss-Newton matrices of Problem(p, structure, **options) at R equal, to 1e-11 of their largest
-    entries, those with every right-hand side solved over every row (the shortcut off)."""
-    free = Chart.from_kernel(R).free_columns
-    problem = Problem(p, structure, **options)
-    full = Problem(p, structure, shortcut=Shortcut(enabled=False))
-    for a, b in zip(problem.normal_equations(problem.evaluate(R), free), full.normal_equations(full.evaluate(R), free)):
-        assert np.abs(a - b).max() < 1e-11 * np.abs(b).max()
-
-
-@pytest.mark.parametrize("n_series, n_samples", [(1, 3000), (6, 1500)])
-def test_bases_of_whole_stationary_blocks_made_from_their_sources(monkeypatch, n_series, n_samples):
-    # past the switch, a chunk of whole stationary blocks starts its blocked solve from T^-1 b_k made
-    # from the bases' sources (p_hat_v, windows of y_a) instead of from the right-hand sides: the same
-    # matrices as every right-hand side solved over every row. Unequal depths, constant weights other
-    # than one and an exact variable (an h-base without a c-base), one series and a batch of series.
-    from ident.solver import inverted_bases
-    rng = np.random.default_rng(12)
-    shape = Structure((3, 2, 3), (n_samples,) * n_series, perm=tuple(rng.permutation(8)))
-    weights = np.concatenate([np.full(shape.n_samples(j, i), weight) for j in range(n_series)
-                              for i, weight in enumerate((2.0, np.inf, 0.5))])
-    structure = Structure(shape.depths, shape.n_cols, shape.perm, weights)
-    series = [simulate(rng, 1, 2, 2, n_samples + 2) + 0.1 * rng.standard_normal((n_samples + 2, 3))
-              for _ in range(n_series)]  # a system, so that the factor becomes stationary
-    p = np.concatenate([w[: structure.n_samples(j, i), i] for j, w in enumerate(series) for i in range(3)])
-    calls = []
-    original = inverted_bases.InvertedBases.blocks
-    monkeypatch.setattr(inverted_bases.InvertedBases, "blocks", lambda *a: calls.append(1) or original(*a))
-    assert_gauss_newton_as_solved_in_full(p, structure, initial_kernel(p, structure, 6),
-                                          chunk_elements=1 << 12)  # delayed chunks of 256 columns: several whole
-    assert calls, "no chunk of whole stationary blocks was made from the bases' sources"
-
-
-def test_bases_from_their_sources_when_the_weighted_variables_have_depth_one(monkeypatch):
-    # the c-bases' maps need no samples after a block when every weighted variable has depth 1 (the
-    # deeper one is exact): the bases from their sources still give the matrices of the full solve
-    from ident.solver import inverted_bases
-    rng = np.random.default_rng(3)
-    shape = Structure((1, 1, 3), (3000,), perm=tuple(range(5)))
-    weights = np.concatenate([np.full(shape.n_samples(0, i), w) for i, w in enumerate((1.0, 2.0, np.inf))])
-    structure = Structure(shape.depths, shape.n_cols, shape.perm, weights)
-    p = rng.standard_normal(structure.n_params)
-    depths = []
-    original = inverted_bases.InvertedBases.blocks
-    monkeypatch.setattr(inverted_bases.InvertedBases, "blocks", lambda self, *a: depths.append(self.depth) or original(self, *a))
-    assert_gauss_newton_as_solved_in_full(p, structure, initial_kernel(p, structure, 3), chunk_elements=1 << 12)
-    assert depths and set(depths) == {1}
-
-
-@pytest.mark.parametrize("ell, n_series, n_samples", [(3, 1, 3000), (3, 3, 1000)])
-def test_free_responses_complete_the_delayed_bases(monkeypatch, ell, n_series, n_samples):
-    # the solver switches to the delayed bases as soon as the factor is stationary over the delays, while
-    # the solutions still differ from their delayed bases by a free response of the recursion; here that
-    # difference is 1e-10 of the Gram matrix (the delayed bases alone are off by that), the free responses
-    # make it exact. A group of several series is one batch with a free response per series.
-    rng = np.random.default_rng(11)
-    series = [simulate(rng, 2, 2, 2 * ell, n_samples) for _ in range(n_series)]
-    structure = Structure.time_major(4, ell, [n_samples - ell] * n_series)
-    p = structure.params_from_series(series)
-    R = initial_kernel(p, structure, 4 * ell + 2)
-    R = R + 0.3 * rng.standard_normal(R.shape)
-    free = Chart.from_kernel(R).free_columns
-    differences = []
-    original = gauss_newton._FreeResponses.add_to
-    monkeypatch.setattr(gauss_newton._FreeResponses, "add_to",
-                        lambda self, *a: differences.append(np.abs(self.differences).max()) or original(self, *a))
-    problem = Problem(p, structure)
-    delayed = problem.normal_equations(problem.evaluate(R), free)
-    assert differences and max(differences) > 1e-8, "no switch before the free responses decayed"
-    full = Problem(p, structure, shortcut=Shortcut(enabled=False))
-    solved = full.normal_equations(full.evaluate(R), free)
-    for a, b in zip(delayed, solved):
-        assert np.abs(a - b).max() < 1e-12 * np.abs(b).max()
+    problem.normal_equations(problem.evaluate(R), Chart.from_kernel(R).free_columns)
+    assert calls, "the delayed bases were not used on a long series"
 
 
 def test_delayed_products_match_direct_sums():
@@ -727,12 +621,8 @@ def test_an_ill_conditioned_factor_is_stationary_to_its_rounding_level():
     # two nearly dependent kernel rows: the factor's rows scatter around the stationary one by about
     # kappa eps, above the setting's tolerance; taken as stationary at that level, the cost and the
     # Gauss-Newton matrix agree with those of the factor computed in full to a few hundred kappa eps
-    rng = np.random.default_rng(7)
-    n_samples, q = 6000, 8
-    structure = Structure.time_major(q, 1, [n_samples - 1])
-    p = structure.params_from_series([rng.standard_normal((n_samples, q))])
-    R = rng.standard_normal((4, 2 * q))
-    R[3] = R[2] + 0.01 * rng.standard_normal(2 * q)
+    from test_solver_reference import ill_conditioned
+    p, structure, R, _ = ill_conditioned()
     shortcut_state = Problem(p, structure).evaluate(R)
     full_state = Problem(p, structure, shortcut=Shortcut(enabled=False)).evaluate(R)
     (factor,) = shortcut_state.factors
