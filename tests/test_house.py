@@ -2,7 +2,7 @@
 
 - No module of ``ident`` imports, directly or through others, a module that imports it back. Every
   ``import`` counts, also one inside a function: a cycle hidden in a function is still a cycle.
-  ``from ident.solver import gauss_newton`` is an import of the submodule, ``from ident.solver import
+  ``from ident.solver import reference`` is an import of the submodule, ``from ident.solver import
   slra`` one of the package.
 - A function (or method) has at most 80 lines, its docstring not counted (the docstrings are the
   paper's inline help, with a line per parameter); a module has at most 800 lines.
