@@ -124,3 +124,24 @@ def test_a_trial_that_is_not_finite_is_a_rejected_step() -> None:
         return (cost if x[0] <= 0.5 else np.inf), normal
     fit = normal_levenberg_marquardt(evaluation, np.array([0.0]), 1e-10, 200)
     assert np.isfinite(fit.cost) and 0.0 < fit.x[0] <= 0.5
+
+
+def test_a_solution_with_its_normal_equations_is_freed_without_the_collector() -> None:
+    """The closure holds the factor, not the solution: a reference cycle would keep the band (the
+    largest array of an evaluation) alive until the cyclic collector runs, two bands at once in ident."""
+    import gc
+    import weakref
+    kernel, (values,), (weights,) = gappy_problem(1, 1, 2, [1200], 7)
+    gc.disable()
+    try:
+        found = banded_misfit.banded_solution(kernel, values, weights, normal=True)
+        assert found is not None and found.normal_equations is not None
+        alive = weakref.ref(found)
+        del found
+        assert alive() is None
+        solution = kernel_solution(kernel, values, weights, normal=True)
+        alive = weakref.ref(solution)
+        del solution
+        assert alive() is None
+    finally:
+        gc.enable()

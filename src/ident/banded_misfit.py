@@ -156,10 +156,12 @@ def banded_solved(kernel: np.ndarray, values: np.ndarray, weights: np.ndarray, j
     factor = (lu, pivots, half, lam_at, z_at)
     if jacobian:
         solution.jacobian = banded_jacobian(blocks, lam, wh, inv_v, gaps, free, factor)
-    if normal:
+    if normal:  # the closure holds the factor, not the solution: no cycle keeps the band for the collector
+        residuals = solution.residuals
+
         def normal_equations():
             with one_blas_thread():
-                return banded_normal_equations(blocks, lam, wh, inv_v, gaps, free, factor, solution.residuals)
+                return banded_normal_equations(blocks, lam, wh, inv_v, gaps, free, factor, residuals)
         solution.normal_equations = normal_equations
     return solution
 

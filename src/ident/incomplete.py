@@ -54,9 +54,9 @@ def kernel_solution(kernel: np.ndarray, values: np.ndarray, weights: np.ndarray,
     if found is not None:
         return KernelSolution(found.residuals, found.approximation, found.jacobian, found.normal_equations)
     solution = sparse_solution(kernel, values, weights, jacobian or normal)
-    if normal:
-        full_jacobian = solution.jacobian
-        solution.normal_equations = lambda: (full_jacobian.T @ full_jacobian, full_jacobian.T @ solution.residuals)
+    if normal:  # the closure holds J and r, not the solution (no reference cycle)
+        full_jacobian, residuals = solution.jacobian, solution.residuals
+        solution.normal_equations = lambda: (full_jacobian.T @ full_jacobian, full_jacobian.T @ residuals)
         solution.jacobian = full_jacobian if jacobian else None
     return solution
 
