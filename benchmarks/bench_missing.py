@@ -93,6 +93,19 @@ def evaluation_memory(n_samples: int, form: str = "normal") -> dict:
     return {"T": n_samples, "form": form, "seconds": float(out[0]), "peak_MiB": float(out[1])}
 
 
+def band_size(n_samples: int) -> dict:
+    """The band that the LU factors at 10 % missing (the evaluations' data): its half-bandwidth, rows,
+    columns and MiB."""
+    from ident.banded_misfit import saddle_band, slots
+    model, w, rng = noisy_data(n_samples)
+    missing = np.isnan(with_gaps(w, 0.1, rng))
+    kernel = in_chart(ss_to_kernel(model, 2))
+    blocks = kernel.reshape(2, 3, 4).transpose(1, 0, 2)
+    lam_start, z_at = slots(missing, 2, 2)
+    band, half = saddle_band(blocks, np.where(missing, 0.0, 1.0), np.nonzero(missing), lam_start, z_at, 1e-10)
+    return {"T": n_samples, "half": half, "rows": band.shape[0], "columns": band.shape[1], "MiB": band.nbytes / 2**20}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "bench_missing.json"))
@@ -153,6 +166,7 @@ def main() -> None:
     record["memory"] = [peak_memory(size) for size in args.memory_sizes]
     record["evaluation_memory"] = [evaluation_memory(size, form) for form in ("normal", "jacobian")
                                    for size in args.evaluation_sizes]
+    record["band"] = band_size(max(args.evaluation_sizes))
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps(record, indent=1) + "\n")
     print(json.dumps(record, indent=1))

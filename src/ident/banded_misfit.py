@@ -59,8 +59,10 @@ def saddle_band(blocks: np.ndarray, inv_v: np.ndarray, gaps: tuple, lam_start: n
                + [int(np.abs(z_at[inside] - lam_start[t[inside]]).max(initial=0)) for t, inside in reach]) + p - 1
     band = np.zeros((3 * half + 1, n_windows * p + len(z_at)), order="F")  # LAPACK's order: factored in place
 
+    flat = band.ravel(order="F")  # a view: one index per entry scatters faster than a pair
+
     def put(rows, cols, values):  # entry (i, j) at band[2 half + i - j, j]
-        band[2 * half + rows - cols, cols] = values
+        flat[2 * half + rows + (band.shape[0] - 1) * cols] = values
 
     for d in range(ell + 1):  # S[t, t + d] = sum_j R_{j+d} diag(1 / v(t + j + d)) R_j^T
         S = np.zeros((n_windows - d, p, p))
