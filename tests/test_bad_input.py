@@ -1580,3 +1580,19 @@ PLAIN_REFERENCE_CASES = [
 @pytest.mark.parametrize("name, call, error, words", PLAIN_REFERENCE_CASES, ids=[c[0] for c in PLAIN_REFERENCE_CASES])
 def test_bad_arguments_of_the_plain_gauss_newton_matrix_are_refused(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# issue 29, point 5: the refinement on missing samples on its normal equations (33-banded-missing-data.md)
+
+from ident.normal_lm import normal_levenberg_marquardt  # noqa: E402
+
+NORMAL_LM_CASES = [
+    ('a start where the misfit is not finite',
+     lambda: normal_levenberg_marquardt(lambda x: (np.inf, None), np.zeros(2), 1e-10, 10),
+     ValueError, 'the misfit at the start of the refinement is inf'),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", NORMAL_LM_CASES, ids=[c[0] for c in NORMAL_LM_CASES])
+def test_the_normal_equations_loop_refuses_a_start_without_a_misfit(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

@@ -1,4 +1,4 @@
-"""The misfit with gaps by the banded saddle-point system (32-missing-data.md): it answers for the
+"""The misfit with gaps by the banded saddle-point system (33-banded-missing-data.md): it answers for the
 smoother of 16-misfit.md on long series with gaps, and agrees with it and with the sparse system."""
 from __future__ import annotations
 

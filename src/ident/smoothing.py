@@ -514,7 +514,7 @@ def smoothed_misfit(A, B, C, D, series, exact=(), initial=None, banded: bool = T
     initial : list of None, "rest" or (L, q) arrays, optional
         Per series: free initial state, x(1) = 0, or the samples before the data (exact).
     banded : bool
-        Whether a long series with gaps may be answered by the banded system of 32-missing-data.md.
+        Whether a long series with gaps may be answered by the banded system of 33-banded-missing-data.md.
     """
     matrices = [np.array(M, dtype=float) for M in (A, B, C, D)]  # copies: balanced scales in place
     model = balanced(*(M.copy() for M in matrices))
