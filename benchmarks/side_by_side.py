@@ -202,7 +202,10 @@ def case_daisy(names=None):
     from ident import daisy as daisy_sets
     names = names or [info.name for info in daisy_sets.table1()]
     import control  # noqa: F401  imported before the clock starts (later versions import it on first use)
-    from ident import multistart
+    try:  # the module that calls the solver for ident: ident.multistart since issue 28, ident.identification before
+        from ident import multistart
+    except ImportError:
+        from ident import identification as multistart
     solver_seconds = []  # the solver's own seconds (SLRAResult.time) of every call of ident's slra
     solve = multistart.slra
 
