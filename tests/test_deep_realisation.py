@@ -8,7 +8,7 @@ import control
 import numpy as np
 import pytest
 
-from ident import examples, ident, misfit
+from ident import examples, ident
 from ident.representations import kernel_to_ss, markov_parameters, simulate
 
 DEEPER = "realised from a Hankel matrix of depth"

@@ -125,7 +125,6 @@ def banded_solved(kernel: np.ndarray, values: np.ndarray, weights: np.ndarray, j
     p, width = kernel.shape
     n_samples, q = values.shape
     ell = width // q - 1
-    n_windows = n_samples - ell
     blocks = kernel.reshape(p, ell + 1, q).transpose(1, 0, 2)  # R_k, (ell + 1, p, q)
     missing, free = weights == 0, (weights > 0) & np.isfinite(weights)
     inv_v = np.zeros(values.shape)
