@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import dataclasses
+from typing import Literal
 
 import numpy as np
 
@@ -47,7 +48,7 @@ class Completion:
     misfit: float
     wh: object
     missing: object
-    method: str = "model"
+    method: Literal["model", "data-driven"] = "model"
 
     def plot(self, path=None, *, title: str = ""):
         """Each variable against the sample, the series one after another: the data (black) and the
@@ -77,7 +78,7 @@ class Forecast:
     w: object
     misfit: float
     n_past: int
-    method: str = "model"
+    method: Literal["model", "model with a state prior", "data-driven"] = "model"
 
     def plot(self, path=None, *, title: str = ""):
         """Each variable against the sample: the past (black), the future (grey, after the dotted line).
