@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["split_kernel", "join_kernel", "cond_p_ell", "p_ell_distance", "hankel_rows", "time_major_columns",
-           "in_chart", "block_toeplitz", "observability_rows", "annihilator_kernel", "state_space_kernel",
+__all__ = ["split_kernel", "join_kernel", "kernel_blocks", "blocks_kernel", "cond_p_ell", "p_ell_distance",
+           "hankel_rows", "time_major_columns", "in_chart", "block_toeplitz", "observability_rows", "annihilator_kernel", "state_space_kernel",
            "observer_form", "observer_form_kernel"]
 
 EPS = np.finfo(float).eps
 
 
-# <<split R into its blocks Q_i and P_i>>= literate/10-representations.md:38
+# <<split R into its blocks Q_i and P_i>>= literate/10-representations.md:42
 def split_kernel(R, m, ell):
     """Blocks of R = [Q_0 -P_0 ... Q_ell -P_ell]: (Q, P) with Q[i] = Q_i (p x m), P[i] = P_i (p x p)."""
     R = np.asarray(R, dtype=float)
@@ -34,16 +34,26 @@ def split_kernel(R, m, ell):
         raise ValueError(f"R has {p} rows but q - m = {q} - {m} = {q - m} outputs")
     if not np.all(np.isfinite(R)):
         raise ValueError("R contains non-finite entries")
-    blocks = R.reshape(p, ell + 1, q).transpose(1, 0, 2)  # blocks[i] = R_i
+    blocks = kernel_blocks(R, ell)
     return blocks[:, :, :m], -blocks[:, :, m:]
 
 
 def join_kernel(Q, P):
     """R = [Q_0 -P_0 ... Q_ell -P_ell] from the blocks Q[i] = Q_i (p x m) and P[i] = P_i (p x p)."""
-    return np.concatenate([Q, -P], axis=2).transpose(1, 0, 2).reshape(P.shape[1], -1)
+    return blocks_kernel(np.concatenate([Q, -P], axis=2))
 
 
-# <<how far R is from a singular P_ell>>= literate/10-representations.md:89
+def kernel_blocks(R, ell) -> np.ndarray:
+    """The blocks of R = [R_0 ... R_ell] (p x (ell+1) q): blocks[i] = R_i (p x q), a view of R; no checks."""
+    return R.reshape(R.shape[0], ell + 1, -1).transpose(1, 0, 2)
+
+
+def blocks_kernel(blocks) -> np.ndarray:
+    """R = [R_0 ... R_ell] from its blocks (ell + 1, p, q), blocks[i] = R_i: the inverse of kernel_blocks."""
+    return blocks.transpose(1, 0, 2).reshape(blocks.shape[1], -1)
+
+
+# <<how far R is from a singular P_ell>>= literate/10-representations.md:103
 def cond_p_ell(R, P_ell):
     """||R||_2 ||P_ell^{-1}||_2, the relative condition number of the chart P_ell = I (inf if singular).
 
@@ -53,7 +63,7 @@ def cond_p_ell(R, P_ell):
     smallest = np.linalg.svd(P_ell, compute_uv=False)[-1]
     norm_R = np.linalg.norm(R, 2)
     return np.inf if smallest <= EPS * norm_R else norm_R / smallest
-# <<how far R is from a singular P_ell>>+= literate/10-representations.md:108
+# <<how far R is from a singular P_ell>>+= literate/10-representations.md:122
 def p_ell_distance(kernel, m: int, ell: int) -> float:
     """sigma_min(P_ell) of the representative of the kernel (p x (ell+1) q, p = q - m) with orthonormal
     rows, from a QR factorisation; ValueError if the shape does not fit m and ell."""
@@ -65,7 +75,7 @@ def p_ell_distance(kernel, m: int, ell: int) -> float:
     return float(np.linalg.svd(rows[:, ell * n_vars + m:], compute_uv=False)[-1])
 
 
-# <<the chart P_ell = I on arrays>>= literate/10-representations.md:205
+# <<the chart P_ell = I on arrays>>= literate/10-representations.md:219
 def in_chart(kernel) -> np.ndarray:
     """P_ell^{-1} R, the same model's kernel with R[:, -p:] = -I (P_ell = I); no checks."""
     return np.linalg.solve(-kernel[:, kernel.shape[1] - kernel.shape[0]:], kernel)
@@ -92,7 +102,7 @@ def time_major_columns(depths, perm) -> np.ndarray:
     return lags * len(depths) + variables
 
 
-# <<block-Toeplitz matrix of Markov parameters>>= literate/10-representations.md:607
+# <<block-Toeplitz matrix of Markov parameters>>= literate/10-representations.md:621
 def block_toeplitz(H, k):
     """Lower block-triangular Toeplitz matrix (k p x k m) of the Markov parameters H[0 .. k-1] (p x m)."""
     p, m = H.shape[1:]
@@ -102,7 +112,7 @@ def block_toeplitz(H, k):
     return T.reshape(k * p, k * m)
 
 
-# <<observability matrix by the row recursion>>= literate/10-representations.md:484
+# <<observability matrix by the row recursion>>= literate/10-representations.md:498
 def observability_rows(A, C, k: int) -> np.ndarray:
     """O_k = col(C, CA, ..., CA^{k-1}) (k p x n) by the row recursion C A^j = (C A^(j-1)) A."""
     n, p = A.shape[0], C.shape[0]
@@ -114,7 +124,7 @@ def observability_rows(A, C, k: int) -> np.ndarray:
     return O.reshape(k * p, n)
 
 
-# <<the kernel of a state-space model on arrays>>= literate/10-representations.md:764
+# <<the kernel of a state-space model on arrays>>= literate/10-representations.md:778
 def annihilator_kernel(P, markov) -> np.ndarray:
     """R = [Q_0 -P_0 ... Q_ell -P_ell] with Q = P T_{ell+1}: P (p x (ell+1) p) annihilates O_{ell+1},
     markov holds the ell + 1 Markov parameters D, CB, ... (ell + 1, p, m)."""
@@ -132,7 +142,7 @@ def state_space_kernel(A, B, C, D, ell: int) -> np.ndarray:
     return annihilator_kernel(annihilator, markov)
 
 
-# <<observer canonical form of the blocks>>= literate/10-representations.md:406
+# <<observer canonical form of the blocks>>= literate/10-representations.md:420
 def observer_form(Q, P):
     """(A, B, C, D) of the observer canonical form of the blocks Q[i] = Q_i, P[i] = P_i (P_ell invertible)."""
     Q, P = np.linalg.solve(P[-1], Q), np.linalg.solve(P[-1], P)  # the chart P_ell = I
@@ -146,7 +156,7 @@ def observer_form(Q, P):
     return A, B, np.eye(p, n), D
 
 
-# <<read R off an observer canonical form>>= literate/10-representations.md:651
+# <<read R off an observer canonical form>>= literate/10-representations.md:665
 def observer_form_kernel(A, B, C, D, ell):
     """R = [Q_0 -P_0 ... Q_ell -P_ell] (P_ell = I) read off an observer canonical form, or None
     if (A, C) are not of that form for this ell."""
