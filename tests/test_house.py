@@ -10,6 +10,8 @@
   it by class without knowing the module that raises it.
 - The kernel R = [R_0 ... R_ell] is cut into its blocks in ``ident.kernel_layout`` only (issue 28): no
   other module reshapes it by ``ell + 1`` or divides its width by ``ell + 1``.
+- No module of ``ident`` imports the literate tools or the examples' helpers they tangle
+  (``literate_tools/tangled/examples.py``, issue 28): those serve the repository, not the package.
 - One module submits work to executors, ``ident.executors`` (issue 28): one policy for parallel work
   (largest first, results in order, cancelled on Ctrl-C, models across processes as matrices).
 - The literate tooling, ``literate_tools/`` (what ``tangle.py`` and ``weave.py`` run), keeps the same
@@ -305,3 +307,14 @@ def test_the_kernel_is_cut_into_its_blocks_in_kernel_layout_only() -> None:
     found = {f"{name}:{node.lineno}" for name, path in IDENT_MODULES.items() if name != "ident.kernel_layout"
              for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))) if cuts_a_kernel_into_blocks(node)}
     assert not found, found
+
+
+def test_the_package_imports_nothing_of_the_repository_tooling() -> None:
+    """The examples' helpers (``literate_tools/tangled/examples.py``, tangled from 03-examples.md) and the
+    literate tools serve the repository's examples, tests and benchmarks, not the package (issue 28): no
+    module of ident imports them, and none is left in the package."""
+    found = {name: sorted(module for module in imported_names(name)
+                          if module.split(".")[0] == "literate_tools" or module == "ident.examples")
+             for name in IDENT_MODULES}
+    assert not any(found.values()), {name: modules for name, modules in found.items() if modules}
+    assert not (PACKAGE / "examples.py").exists()
