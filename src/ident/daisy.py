@@ -88,25 +88,25 @@ NOISY_COPIES = ("columns after the time column: 4 blocks of inputs (noise-free, 
                 "then 4 blocks of outputs; Table 1 uses the noise-free block")
 
 # Table 1, one row a data set in the order of the table: name, T, m, p, ell, input columns, output
-# columns, time column, sampling time (s), path on the DAISY server, title.
+# columns, time column, sampling time (s), path on the DAISY server, title (a row's number is its `table`).
 TABLE_1_ROWS = [
-    ("erie", 57, 5, 2, 1, (1, 6), (21, 23), 0, None, "environmental/erie.dat.gz", "Simulation of the western basin of Lake Erie"),
-    ("destill", 90, 5, 3, 1, (1, 6), (21, 24), 0, None, "process_industry/destill.dat.gz", "Ethane-ethylene distillation column (simulation)"),
-    ("heating_system", 801, 1, 1, 2, (1, 2), (2, 3), 0, 2.0, "thermic/heating_system.dat.gz", "Heating system: halogen lamp over a thin steel plate"),
-    ("dryer2", 867, 3, 3, 1, (1, 4), (4, 7), 0, 10.0, "process_industry/dryer2.dat.gz", "Industrial dryer (Cambridge Control Ltd)"),
-    ("dryer", 1000, 1, 1, 5, (0, 1), (1, 2), None, 0.08, "mechanical_systems/dryer.dat.gz", "Laboratory setup acting like a hair dryer"),
-    ("ballbeam", 1000, 1, 1, 2, (0, 1), (1, 2), None, 0.1, "mechanical_systems/ballbeam.dat.gz", "Ball-and-beam setup"),
-    ("flutter", 1024, 1, 1, 5, (0, 1), (1, 2), None, None, "mechanical_systems/flutter.dat.gz", "Wing flutter"),
-    ("robot_arm", 1024, 1, 1, 4, (0, 1), (1, 2), None, None, "mechanical_systems/robot_arm.dat.gz", "Flexible robot arm"),
-    ("glassfurnace", 1247, 3, 6, 1, (1, 4), (4, 10), 0, None, "process_industry/glassfurnace.dat.gz", "Glass furnace (Philips)"),
-    ("thermic_res_wall", 1680, 2, 1, 2, (0, 2), (2, 3), None, 10.0, "thermic/thermic_res_wall.dat.gz", "Heat flow density through a two layer wall"),
-    ("pHdata", 2001, 2, 1, 6, (1, 3), (3, 4), 0, 10.0, "process_industry/pHdata.dat.gz", "pH neutralization process (simulation)"),
-    ("CD_player_arm", 2048, 2, 2, 1, (0, 2), (2, 4), None, None, "mechanical_systems/CD_player_arm.dat.gz", "CD-player arm"),
-    ("winding", 2500, 5, 2, 2, (0, 5), (5, 7), None, 0.1, "process_industry/winding.dat.gz", "Industrial winding process test setup"),
-    ("exchanger", 4000, 1, 1, 2, (1, 2), (2, 3), 0, 1.0, "process_industry/exchanger.dat.gz", "Liquid-saturated steam heat exchanger"),
-    ("evaporator", 6305, 3, 3, 1, (0, 3), (3, 6), None, None, "process_industry/evaporator.dat.gz", "Industrial four-stage evaporator"),
-    ("cstr", 7500, 1, 2, 1, (1, 2), (2, 4), 0, 0.1, "process_industry/cstr.dat.gz", "Continuous stirred tank reactor"),
-    ("steamgen", 9600, 4, 4, 1, (1, 5), (5, 9), 0, 3.0, "process_industry/steamgen.dat.gz", "Steam generator at Abbott Power Plant"),
+    ("erie",             57,   5, 2, 1, (1, 6), (21, 23), 0,    None, "environmental/erie.dat.gz",               "Simulation of the western basin of Lake Erie"),
+    ("destill",          90,   5, 3, 1, (1, 6), (21, 24), 0,    None, "process_industry/destill.dat.gz",         "Ethane-ethylene distillation column (simulation)"),
+    ("heating_system",   801,  1, 1, 2, (1, 2), (2, 3),   0,    2.0,  "thermic/heating_system.dat.gz",           "Heating system: halogen lamp over a thin steel plate"),
+    ("dryer2",           867,  3, 3, 1, (1, 4), (4, 7),   0,    10.0, "process_industry/dryer2.dat.gz",          "Industrial dryer (Cambridge Control Ltd)"),
+    ("dryer",            1000, 1, 1, 5, (0, 1), (1, 2),   None, 0.08, "mechanical_systems/dryer.dat.gz",         "Laboratory setup acting like a hair dryer"),
+    ("ballbeam",         1000, 1, 1, 2, (0, 1), (1, 2),   None, 0.1,  "mechanical_systems/ballbeam.dat.gz",      "Ball-and-beam setup"),
+    ("flutter",          1024, 1, 1, 5, (0, 1), (1, 2),   None, None, "mechanical_systems/flutter.dat.gz",       "Wing flutter"),
+    ("robot_arm",        1024, 1, 1, 4, (0, 1), (1, 2),   None, None, "mechanical_systems/robot_arm.dat.gz",     "Flexible robot arm"),
+    ("glassfurnace",     1247, 3, 6, 1, (1, 4), (4, 10),  0,    None, "process_industry/glassfurnace.dat.gz",    "Glass furnace (Philips)"),
+    ("thermic_res_wall", 1680, 2, 1, 2, (0, 2), (2, 3),   None, 10.0, "thermic/thermic_res_wall.dat.gz",         "Heat flow density through a two layer wall"),
+    ("pHdata",           2001, 2, 1, 6, (1, 3), (3, 4),   0,    10.0, "process_industry/pHdata.dat.gz",          "pH neutralization process (simulation)"),
+    ("CD_player_arm",    2048, 2, 2, 1, (0, 2), (2, 4),   None, None, "mechanical_systems/CD_player_arm.dat.gz", "CD-player arm"),
+    ("winding",          2500, 5, 2, 2, (0, 5), (5, 7),   None, 0.1,  "process_industry/winding.dat.gz",         "Industrial winding process test setup"),
+    ("exchanger",        4000, 1, 1, 2, (1, 2), (2, 3),   0,    1.0,  "process_industry/exchanger.dat.gz",       "Liquid-saturated steam heat exchanger"),
+    ("evaporator",       6305, 3, 3, 1, (0, 3), (3, 6),   None, None, "process_industry/evaporator.dat.gz",      "Industrial four-stage evaporator"),
+    ("cstr",             7500, 1, 2, 1, (1, 2), (2, 4),   0,    0.1,  "process_industry/cstr.dat.gz",            "Continuous stirred tank reactor"),
+    ("steamgen",         9600, 4, 4, 1, (1, 5), (5, 9),   0,    3.0,  "process_industry/steamgen.dat.gz",        "Steam generator at Abbott Power Plant"),
 ]
 
 SHA256 = {
