@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["split_kernel", "join_kernel", "kernel_blocks", "blocks_kernel", "cond_p_ell", "p_ell_distance",
-           "hankel_rows", "time_major_columns", "in_chart", "block_toeplitz", "observability_rows", "annihilator_kernel", "state_space_kernel",
-           "observer_form", "observer_form_kernel"]
+           "hankel_rows", "time_major_columns", "in_chart", "block_toeplitz", "observability_rows",
+           "annihilator_kernel", "state_space_kernel", "observer_form", "observer_form_kernel"]
 
 EPS = np.finfo(float).eps
 
