@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 import warnings
 from pathlib import Path
@@ -29,9 +30,10 @@ import control
 import numpy as np
 
 from ident import daisy, ident, model_uncertainty
-from ident.examples import match_eigenvalues
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # the examples' helpers (03-examples.md) are the repository's, not the package's
+from literate_tools.tangled.examples import match_eigenvalues  # noqa: E402
 DAISY = ROOT.parent / "shared" / "daisy"
 RESULTS = ROOT / "benchmarks" / "results" / "coverage.json"
 SIGMA_RATIO = 0.1  # error std / rms of the true variables: 20 dB

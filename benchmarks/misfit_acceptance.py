@@ -16,16 +16,17 @@ from pathlib import Path
 import numpy as np
 
 from ident import ident, misfit
-from ident.examples import reference_path
 from ident.representations import make_ss, observability_index
+
+REFERENCE = Path(__file__).resolve().parents[1] / "reference"  # the original software's results
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from test_smoothing import agree, dense_misfit, random_models, trajectory_of  # noqa: E402
 
 
 def paper_data() -> None:
-    w = np.loadtxt(reference_path("msd_uy.txt"))
-    reference = json.loads(reference_path("msd_results.json").read_text())
+    w = np.loadtxt(REFERENCE / "msd_uy.txt")
+    reference = json.loads((REFERENCE / "msd_results.json").read_text())
     original = make_ss(*(np.array(reference["ident"][name]) for name in "ABCD"))
     sysh, info, _, _ = ident(w, 1, 14)
     rng = np.random.default_rng(14)

@@ -12,7 +12,8 @@ Usage::
     python tangle.py --where /abs/path/src/ident/hankel.py:42   # the same, from a traceback
 
 The tangler reads UTF-8 (a byte-order mark is allowed), writes only ``.py`` files inside
-``src/ident/`` and removes only generated files there whose root chunk is gone, and writes all
+``src/ident/`` (and ``literate_tools/tangled/``, the examples' helpers: ``OUTPUT_DIRS``) and removes
+only generated files there whose root chunk is gone, and writes all
 files or none: a refusal changes nothing and names the literate ``file:line`` behind it (or the
 option).  Each file is written to a temporary beside it and moved into place, so that an
 interrupted run leaves no partly written file.  Chunks may nest to any depth; a chunk whose
@@ -32,8 +33,9 @@ import signal
 import sys
 from pathlib import Path
 
-from literate_tools.chunks import (GENERATED_MARK, PACKAGE_DIR, REFERENCE, Location, TangleError, Web, check_root,
-                                   expanded_sizes, expansion_error, is_root, normalise_name, read_web, too_large)
+from literate_tools.chunks import (GENERATED_MARK, OUTPUT_DIRS, PACKAGE_DIR, REFERENCE, Location, TangleError, Web,
+                                   check_root, expanded_sizes, expansion_error, is_root, normalise_name, output_dir,
+                                   read_web, too_large)
 
 
 def expand(web: Web, name: str, indent: str = "") -> list[tuple[str, Location | None]]:
@@ -94,18 +96,16 @@ def tangle(root: Path) -> tuple[dict[str, str], Web]:
 
 
 def generated_on_disk(root: Path) -> list[str]:
-    """Files under src/ident that carry the generated-file header."""
+    """Files under src/ident (and the other OUTPUT_DIRS) that carry the generated-file header."""
     found = []
-    package = root / PACKAGE_DIR
-    if package.is_dir():
-        for path in sorted(package.rglob("*.py")):
-            try:
-                with path.open("rb") as handle:
-                    generated = handle.readline().startswith(GENERATED_MARK.encode())
-            except OSError:
-                continue  # a folder named *.py, a broken link: not a generated file
-            if generated:
-                found.append(path.relative_to(root).as_posix())
+    for path in sorted(path for folder in OUTPUT_DIRS if (root / folder).is_dir() for path in (root / folder).rglob("*.py")):
+        try:
+            with path.open("rb") as handle:
+                generated = handle.readline().startswith(GENERATED_MARK.encode())
+        except OSError:
+            continue  # a folder named *.py, a broken link: not a generated file
+        if generated:
+            found.append(path.relative_to(root).as_posix())
     return found
 
 
@@ -142,7 +142,7 @@ def temporary_beside(path: Path, suffix: str = TEMPORARY_SUFFIX) -> Path:
 
 
 def remove_leftover_temporaries(package: Path) -> None:
-    """Remove the temporaries a killed run left in src/ident/ (its own names only, ``.NAME.py.tangle-new``)."""
+    """Remove the temporaries a killed run left in an output folder (its own names only, ``.NAME.py.tangle-new``)."""
     if package.is_dir():
         for path in package.rglob(f".*.py{TEMPORARY_SUFFIX}"):
             if path.is_file() and not path.is_symlink():
@@ -180,11 +180,13 @@ def write(root: Path, outputs: dict[str, str], origins: dict[str, Location] | No
     written are they moved into place (``os.replace``, so that no file is ever partly written) and
     the stale files removed, and a failure or an interrupt on the way puts back what was there
     before and removes the temporaries (those a killed run left are removed by the next run).
-    Nothing outside src/ident/ is written or removed. A refusal is a TangleError naming the root
+    Nothing outside src/ident/ (and the other OUTPUT_DIRS) is written or removed. A refusal is a TangleError naming the root
     chunk's file:line (from ``origins``) or the generated file.
     """
     origins = origins or {}
-    package = (root / PACKAGE_DIR).resolve()
+
+    def folder(name: str) -> Path:
+        return (root / output_dir(name)).resolve()
 
     def culprit(name: str) -> str:
         return f"{origins[name]}: " if name in origins else f"{name}:1: "
@@ -192,9 +194,9 @@ def write(root: Path, outputs: dict[str, str], origins: dict[str, Location] | No
     changes = []
     for name, text in outputs.items():
         path = root / name
-        if not is_root(name) or not inside(package, path):
-            raise TangleError(f"{culprit(name)}{name} lies outside {PACKAGE_DIR}/ (through '..' or a symbolic "
-                              "link); nothing was written")
+        if not is_root(name) or not inside(folder(name), path):
+            raise TangleError(f"{culprit(name)}{name} lies outside {output_dir(name) or PACKAGE_DIR}/ (through '..' "
+                              "or a symbolic link); nothing was written")
         if path.is_dir():
             raise TangleError(f"{culprit(name)}{name} is a folder; nothing was written")
         if not path.is_file() or path.read_bytes() != text.encode("utf-8"):
@@ -203,14 +205,15 @@ def write(root: Path, outputs: dict[str, str], origins: dict[str, Location] | No
     if stale and not outputs:
         raise TangleError(f"{root / 'literate'}: no root chunk (<<{PACKAGE_DIR}/FILE.py>>=) in any document; "
                           f"refusing to remove the {len(stale)} generated file(s) of {PACKAGE_DIR}/")
-    stale = [name for name in stale if inside(package, (root / name).parent)]  # a link itself, not its target
+    stale = [name for name in stale if inside(folder(name), (root / name).parent)]  # a link itself, not its target
     undo: list[tuple[Path, bytes | None]] = []  # what each done step replaced, in order
     temporaries: list[Path] = []
     made: list[Path] = []  # folders that do not exist yet, outermost first
     for folder in dict.fromkeys(path.parent for _, path, _ in changes):
         made.extend(f for f in reversed([folder, *folder.parents]) if not f.exists() and f not in made)
     current = None
-    remove_leftover_temporaries(package)
+    for output in OUTPUT_DIRS:
+        remove_leftover_temporaries(root / output)
     try:
         for current, path, text in changes:
             path.parent.mkdir(parents=True, exist_ok=True)
@@ -254,14 +257,14 @@ def package_file(root: Path, name: str) -> str:
     """``src/ident/FILE.py`` for a file named as the project names it, or by a path (absolute, as a
     traceback prints it, or relative to the current directory) to a file inside ``ROOT/src/ident/``."""
     given = Path(name)
-    if not given.is_absolute() and given.as_posix().startswith(PACKAGE_DIR + "/") and ".." not in given.parts:
+    if not given.is_absolute() and is_root(given.as_posix()) and ".." not in given.parts:
         return given.as_posix()  # the project's own name for it, whatever the current directory
-    package = (root / PACKAGE_DIR).resolve()
     path = Path(name).resolve()
-    if not path.is_relative_to(package):
-        raise TangleError(f"--where: {name} is not inside {package}{os.sep}: only the files the tangler "
-                          f"writes there map back to literate/")
-    return PACKAGE_DIR + "/" + path.relative_to(package).as_posix()
+    for output in OUTPUT_DIRS:
+        if path.is_relative_to((root / output).resolve()):
+            return output + "/" + path.relative_to((root / output).resolve()).as_posix()
+    raise TangleError(f"--where: {name} is not inside {(root / PACKAGE_DIR).resolve()}{os.sep}: only the files the "
+                      f"tangler writes there (or in {', '.join(OUTPUT_DIRS[1:])}/) map back to literate/")
 
 
 def main(argv: list[str] | None = None) -> int:

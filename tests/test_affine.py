@@ -7,9 +7,10 @@ import warnings
 import numpy as np
 import pytest
 
-from ident import Offset, compare, examples, ident, misfit, resid
+from ident import Offset, compare, ident, misfit, resid
 from ident.identification import UnstableModelWarning
 from ident.representations import markov_parameters, random_system, simulate
+from literate_tools.tangled import examples
 
 
 def affine_data(m: int, p: int, ell: int, lengths, seed: int, offset_size: float = 5.0):

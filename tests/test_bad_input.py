@@ -1596,3 +1596,28 @@ NORMAL_LM_CASES = [
 @pytest.mark.parametrize("name, call, error, words", NORMAL_LM_CASES, ids=[c[0] for c in NORMAL_LM_CASES])
 def test_the_normal_equations_loop_refuses_a_start_without_a_misfit(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# issue 28, deliverable 3: optimisers by name (ident.solver.OPTIMISERS, 26-solver-optimiser.md)
+
+from ident.solver import register_optimiser, slra  # noqa: E402
+from ident.structure import Structure  # noqa: E402
+
+_SMALL = (np.arange(10.0) ** 1.5, Structure((2, 2), (4,)), 3)
+OPTIMISER_CASES = [
+    ('an unknown optimiser', lambda: slra(*_SMALL, optimiser="newton"),
+     ValueError, r"optimiser must be one of 'lm'.*, got 'newton'"),
+    ('an optimiser that is not a name', lambda: slra(*_SMALL, optimiser=print),
+     TypeError, 'optimiser must be the name of an optimiser \\(str\\), got builtin_function_or_method'),
+    ('a registered name again', lambda: register_optimiser("lm", lambda *args: None),
+     ValueError, "an optimiser is registered as 'lm' already"),
+    ('an optimiser that cannot be called', lambda: register_optimiser("mine", "lm"),
+     TypeError, 'optimiser must be callable as optimiser\\(problem, initial_kernel, settings, disp\\), got str'),
+    ('an empty name', lambda: register_optimiser("", print),
+     TypeError, "name must be a non-empty str, got ''"),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", OPTIMISER_CASES, ids=[c[0] for c in OPTIMISER_CASES])
+def test_bad_optimisers_are_refused(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

@@ -9,8 +9,9 @@ import scipy.linalg
 import scipy.signal
 import threadpoolctl
 
-from ident import examples, ident, to_continuous
+from ident import ident, to_continuous
 from ident.representations import make_ss
+from literate_tools.tangled import examples
 
 
 def random_continuous(rng, kind: str):

@@ -8,8 +8,9 @@ import control
 import numpy as np
 import pytest
 
-from ident import examples, ident
+from ident import ident
 from ident.representations import kernel_to_ss, markov_parameters, simulate
+from literate_tools.tangled import examples
 
 DEEPER = "realised from a Hankel matrix of depth"
 

@@ -1,4 +1,5 @@
-"""ident.examples beyond what the examples of 03-examples.md show: parameter checks and edge cases."""
+"""literate_tools.tangled.examples (the examples' helpers) beyond what the examples of 03-examples.md show:
+parameter checks and edge cases."""
 from __future__ import annotations
 
 import control
@@ -9,8 +10,8 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from ident import examples  # noqa: E402
 from ident.hankel import block_hankel  # noqa: E402
+from literate_tools.tangled import examples  # noqa: E402
 
 
 # --- the mass-spring-damper chain ---------------------------------------------------------------

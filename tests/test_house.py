@@ -8,6 +8,10 @@
   paper's inline help, with a line per parameter); a module has at most 800 lines.
 - Every warning class of the package is exported from ``ident`` (issue 31), so that a user filters
   it by class without knowing the module that raises it.
+- The kernel R = [R_0 ... R_ell] is cut into its blocks in ``ident.kernel_layout`` only (issue 28): no
+  other module reshapes it by ``ell + 1`` or divides its width by ``ell + 1``.
+- No module of ``ident`` imports the literate tools or the examples' helpers they tangle
+  (``literate_tools/tangled/examples.py``, issue 28): those serve the repository, not the package.
 - One module submits work to executors, ``ident.executors`` (issue 28): one policy for parallel work
   (largest first, results in order, cancelled on Ctrl-C, models across processes as matrices).
 - The literate tooling, ``literate_tools/`` (what ``tangle.py`` and ``weave.py`` run), keeps the same
@@ -284,3 +288,33 @@ def test_the_chapters_are_numbered_in_reading_order_without_letters() -> None:
 def test_no_chapter_is_over_1500_lines(chapter: str) -> None:
     n_lines = len((ROOT / "literate" / chapter).read_text(encoding="utf-8").splitlines())
     assert n_lines <= MAX_CHAPTER_LINES, f"{chapter} has {n_lines} lines"
+
+
+def cuts_a_kernel_into_blocks(node: ast.AST) -> bool:
+    """A ``reshape`` with ``ell + 1`` among its arguments, or a width divided by ``(ell + 1)``: R cut into
+    its blocks R_0, ..., R_ell by hand."""
+    def is_ell_plus_one(sub: ast.AST) -> bool:
+        return (isinstance(sub, ast.BinOp) and isinstance(sub.op, ast.Add) and isinstance(sub.left, ast.Name)
+                and sub.left.id == "ell" and isinstance(sub.right, ast.Constant) and sub.right.value == 1)
+    if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "reshape":
+        return any(is_ell_plus_one(sub) for arg in node.args for sub in ast.walk(arg))
+    return isinstance(node, ast.BinOp) and isinstance(node.op, ast.FloorDiv) and is_ell_plus_one(node.right)
+
+
+def test_the_kernel_is_cut_into_its_blocks_in_kernel_layout_only() -> None:
+    """The layout of R = [R_0 ... R_ell] has one home (issue 28): kernel_layout.kernel_blocks and
+    blocks_kernel (split_kernel and join_kernel with the split of each block into Q_i and -P_i)."""
+    found = {f"{name}:{node.lineno}" for name, path in IDENT_MODULES.items() if name != "ident.kernel_layout"
+             for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))) if cuts_a_kernel_into_blocks(node)}
+    assert not found, found
+
+
+def test_the_package_imports_nothing_of_the_repository_tooling() -> None:
+    """The examples' helpers (``literate_tools/tangled/examples.py``, tangled from 03-examples.md) and the
+    literate tools serve the repository's examples, tests and benchmarks, not the package (issue 28): no
+    module of ident imports them, and none is left in the package."""
+    found = {name: sorted(module for module in imported_names(name)
+                          if module.split(".")[0] == "literate_tools" or module == "ident.examples")
+             for name in IDENT_MODULES}
+    assert not any(found.values()), {name: modules for name, modules in found.items() if modules}
+    assert not (PACKAGE / "examples.py").exists()

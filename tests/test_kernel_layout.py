@@ -126,3 +126,17 @@ def test_observability_rows_and_the_block_toeplitz_matrix() -> None:
     H = rng.standard_normal((3, 2, 1))
     T = kernel_layout.block_toeplitz(H, 3)
     assert np.array_equal(T[4:6, 0:1], H[2]) and np.array_equal(T[2:4, 1:2], H[0]) and not T[0:2, 1:3].any()
+
+
+def test_kernel_blocks_are_views_of_the_time_major_blocks_and_blocks_kernel_is_the_inverse() -> None:
+    rng = np.random.default_rng(9)
+    for m, p, ell in [(0, 1, 0), (1, 1, 3), (2, 3, 2)]:
+        q = m + p
+        R = rng.standard_normal((p, (ell + 1) * q))
+        blocks = kernel_layout.kernel_blocks(R, ell)
+        assert blocks.shape == (ell + 1, p, q) and np.shares_memory(blocks, R)
+        for lag in range(ell + 1):
+            assert np.array_equal(blocks[lag], R[:, lag * q:(lag + 1) * q])
+        assert np.array_equal(kernel_layout.blocks_kernel(blocks), R)  # data movement only: exact
+        Q, P = kernel_layout.split_kernel(R, m, ell)
+        assert np.array_equal(blocks[:, :, :m], Q) and np.array_equal(blocks[:, :, m:], -P)

@@ -809,8 +809,9 @@ def test_exact_data_stop_at_the_rounding_level():
     level of the data; on noisy data the level is far below the cost."""
     import control
 
-    from ident import examples, ident
+    from ident import ident
     from ident.representations import make_ss, simulate
+    from literate_tools.tangled import examples
 
     chain = examples.mass_spring_damper_chain()
     sampled = control.sample_system(chain, 1, method="zoh")

@@ -1,9 +1,9 @@
 """A clone needs only the DAISY files beside it: the examples run with nothing else under ../shared.
 
 The reference results moved from ../shared/reference into the repository's reference/ (read through
-ident.examples.reference_path). Here the repository's tracked files are copied into tmp/project, with
-tmp/shared/daisy (a link to the real DAISY folder) and nothing else under tmp/shared, and the examples
-of every document whose code could read shared or reference data (DATA_READS: five of the sixteen)
+literate_tools.tangled.examples.reference_path). Here the repository's tracked files are copied into
+tmp/project, with tmp/shared/daisy (a link to the real DAISY folder) and nothing else under tmp/shared, and
+the examples of every document whose code could read shared or reference data (DATA_READS: five of the sixteen)
 run there with this interpreter, ident imported from the copy: about 20 s. The other documents name
 neither folder, so they cannot depend on ../shared/reference; running them too would take the whole
 examples' time (25 to 80 s here) once more for nothing.

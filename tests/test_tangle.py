@@ -53,10 +53,11 @@ def test_check_command_on_repository() -> None:
 
 
 def test_every_package_file_is_generated() -> None:
-    package = PROJECT_ROOT / "src" / "ident"
+    """Every .py file of src/ident/ and of literate_tools/tangled/ (the examples' helpers) is a root chunk's."""
     outputs, _ = tangle.tangle(PROJECT_ROOT)
-    on_disk = {p.relative_to(PROJECT_ROOT).as_posix() for p in package.rglob("*.py")}
-    assert on_disk == set(outputs)
+    on_disk = {p.relative_to(PROJECT_ROOT).as_posix() for folder in tangle.OUTPUT_DIRS
+               for p in (PROJECT_ROOT / folder).rglob("*.py")}
+    assert on_disk == set(outputs) and "literate_tools/tangled/examples.py" in on_disk
 
 
 # --- what chunks do ------------------------------------------------------------------------------
@@ -300,6 +301,27 @@ def test_root_names_outside_the_package_or_odd_are_refused(tmp_path, name) -> No
     assert message.startswith(f"literate/a.md:3: root chunk <<{tangle.normalise_name(name)}>> must name a .py file")
     assert tangle.main(["--root", str(tmp_path)]) == 2
     assert not (tmp_path.parent / "x.py").exists() and not (tmp_path / "src").exists()
+
+
+def test_the_examples_helpers_are_tangled_beside_the_package_and_nowhere_else_in_the_tools(tmp_path, capsys) -> None:
+    """literate_tools/tangled/ is the one folder outside src/ident/ the tangler writes (the examples'
+    helpers, issue 28): written, checked, mapped back and removed like the package's files; a root chunk
+    elsewhere in literate_tools/ is not a root chunk and writes nothing there."""
+    doc = ("Text.\n\n" + chunk("<<src/ident/m.py>>=", "a = 1") + chunk("<<literate_tools/tangled/helpers.py>>=", "b = 2")
+           + chunk("<<literate_tools/tangle.py>>=", "overwritten = True"))
+    root = make_project(tmp_path / "project", {"a.md": doc})
+    assert tangle.main(["--root", str(root)]) == 0
+    helpers = root / "literate_tools" / "tangled" / "helpers.py"
+    assert helpers.read_text().startswith(tangle.GENERATED_MARK) and "b = 2\n" in helpers.read_text()
+    assert not (root / "literate_tools" / "tangle.py").exists()
+    line = helpers.read_text().splitlines().index("b = 2") + 1
+    capsys.readouterr()
+    assert tangle.main(["--root", str(root), "--where", f"{helpers.resolve()}:{line}"]) == 0
+    assert capsys.readouterr().out == "literate/a.md:9\n"
+    (root / "literate" / "a.md").write_text("Text.\n\n" + chunk("<<src/ident/m.py>>=", "a = 1"), encoding="utf-8")
+    assert tangle.main(["--root", str(root), "--check"]) == 1
+    assert "literate_tools/tangled/helpers.py: generated file has no root chunk" in capsys.readouterr().out
+    assert tangle.main(["--root", str(root)]) == 0 and not helpers.exists()
 
 
 def test_root_names_that_collide_on_a_case_insensitive_disk(tmp_path) -> None:

@@ -11,6 +11,7 @@ import warnings
 import numpy as np
 from scipy.linalg import lapack
 
+from ident import kernel_layout
 from ident.representations import make_ss, observability_index, observability_matrix, shared_inistate, ss_to_kernel
 from ident.solver.threads import one_blas_thread
 
@@ -125,7 +126,7 @@ def banded_solved(kernel: np.ndarray, values: np.ndarray, weights: np.ndarray, j
     p, width = kernel.shape
     n_samples, q = values.shape
     ell = width // q - 1
-    blocks = kernel.reshape(p, ell + 1, q).transpose(1, 0, 2)  # R_k, (ell + 1, p, q)
+    blocks = kernel_layout.kernel_blocks(kernel, ell)  # R_k, (ell + 1, p, q)
     missing, free = weights == 0, (weights > 0) & np.isfinite(weights)
     inv_v = np.zeros(values.shape)
     np.divide(1.0, weights, out=inv_v, where=free)
@@ -260,10 +261,10 @@ def banded_normal_equations(blocks, lam, wh, inv_v, gaps, free, factor, residual
 
 def kernel_residual(kernel: np.ndarray, wh: np.ndarray) -> float:
     """max |R H_{ell+1}(wh)| relative to max |R| max |wh|."""
-    p, width = kernel.shape
+    width = kernel.shape[1]
     q = wh.shape[1]
     # by einsum: a (T, q) @ (q, p) product in threaded BLAS costs more in synchronisation than in arithmetic
-    residual = windows_of(kernel.reshape(p, width // q, q).transpose(1, 0, 2), wh)
+    residual = windows_of(kernel_layout.kernel_blocks(kernel, width // q - 1), wh)
     size = max(float(np.abs(kernel).max() * np.abs(wh).max()), np.finfo(float).tiny)
     return float(np.abs(residual).max(initial=0.0)) / size
 

@@ -19,7 +19,7 @@ __all__ = ["Stability", "STABILITY_MARGIN", "checked_stability", "stable_choice"
            "clipped"]
 
 
-# <<the stability-constrained fit>>= literate/30-uncertainty-and-stability.md:826
+# <<the stability-constrained fit>>= literate/30-uncertainty-and-stability.md:828
 STABILITY_MARGIN = 1e-3  # default margin: spectral radius at most 1 - margin
 PULL_INSIDE = 0.99  # a start's poles are pulled to this share of the bound
 ON_THE_BOUND = 1 - 1e-9  # a step that leaves the bound is pulled back to this share of it
@@ -37,30 +37,28 @@ def pulled_inside(kernel, m: int, ell: int, bound: float, share: float = PULL_IN
     if radius <= share * bound:
         return kernel
     alpha = share * bound / radius
-    n_vars = kernel.shape[1] // (ell + 1)
-    powers = np.repeat(alpha ** (ell - np.arange(ell + 1.0)), n_vars)
-    return kernel * powers
+    powers = alpha ** (ell - np.arange(ell + 1.0))  # R_i times alpha^(ell - i)
+    return kernel_layout.blocks_kernel(kernel_layout.kernel_blocks(kernel, ell) * powers[:, None, None])
 
 
 def clipped(kernel, m: int, ell: int, bound: float) -> np.ndarray:
     """The kernel (P_ell = I) with each pole of modulus above bound moved radially onto it and nothing
     else changed: P(z) <- P(z) + (lambda - lambda') eta S(z) / (xi^T eta), Q(z) kept (see the text)."""
-    n_outputs, n_vars = kernel.shape[0], kernel.shape[1] // (ell + 1)
-    blocks = kernel.reshape(n_outputs, ell + 1, n_vars).astype(complex)  # R_i = [Q_i, -P_i] = blocks[:, i]
+    blocks = kernel_layout.kernel_blocks(kernel, ell).astype(complex)  # R_i = [Q_i, -P_i] = blocks[i]
     for pole in np.linalg.eigvals(state_matrix(kernel, m, ell)):
         if abs(pole) <= bound:
             continue
         moved_to = bound * pole / abs(pole)
         P = -blocks[:, :, m:]
-        left = np.linalg.svd(np.einsum("i,aib->ba", pole ** np.arange(ell + 1), P))[2][-1].conj()  # xi^T P(pole) = 0
-        rows = np.einsum("a,aib->ib", left, P)  # xi^T P_i, divided by (z - pole) below
+        left = np.linalg.svd(np.einsum("i,iab->ba", pole ** np.arange(ell + 1), P))[2][-1].conj()  # xi^T P(pole) = 0
+        rows = np.einsum("a,iab->ib", left, P)  # xi^T P_i, divided by (z - pole) below
         quotient = np.zeros((ell, rows.shape[1]), dtype=complex)
         quotient[ell - 1] = rows[ell]
         for i in range(ell - 1, 0, -1):
             quotient[i - 1] = rows[i] + pole * quotient[i]
         eta = left.conj()
-        blocks[:, :ell, m:] -= (pole - moved_to) / (left @ eta) * np.einsum("a,ib->aib", eta, quotient)
-    return np.real(blocks).reshape(n_outputs, -1)
+        blocks[:ell, :, m:] -= (pole - moved_to) / (left @ eta) * np.einsum("a,ib->iab", eta, quotient)
+    return np.real(kernel_layout.blocks_kernel(blocks))
 
 
 def constrained_fit(problem, kernel, m: int, ell: int, bound: float, maxiter: int = 100,
