@@ -78,6 +78,29 @@ def test_white_noise_has_no_state() -> None:
     assert (found.n, found.ell) == (0, 0)
 
 
+def test_the_bound_on_the_largest_correlation_is_the_99_percent_point_of_white_noise() -> None:
+    from ident.data_complexity import correlations_above_independence, largest_correlation_bound, past_future_correlations
+    rng = np.random.default_rng(12)
+    records = [rng.standard_normal((1000, 3)) for _ in range(400)]
+    largest = np.array([past_future_correlations([w], 2)[0][0] for w in records])  # 6 directions a half
+    bound = largest_correlation_bound(6, 6, 997)
+    assert abs(np.quantile(largest, 0.99) - bound) <= 0.1 * bound  # Johnstone's approximation of the 99 % point
+    assert np.sum(largest > bound) <= 12  # 1 % of 400 is 4
+    assert sum(correlations_above_independence([w], 2) > 0 for w in records[:100]) <= 5  # white noise: no state
+
+
+def test_a_variable_that_is_zero_throughout_adds_no_direction() -> None:
+    from ident.data_complexity import past_future_correlations
+    rng = np.random.default_rng(13)
+    (w,), _ = trajectories(1, (2,), rng, [600])
+    w = w + 0.1 * w.std(axis=0) * rng.standard_normal(w.shape)
+    with_zero = np.hstack([w, np.zeros((600, 1))])  # an output with no noise that the system keeps at 0
+    correlations, past_directions, future_directions, columns = past_future_correlations([with_zero], 3)
+    assert (past_directions, future_directions, columns) == (6, 6, 595)
+    np.testing.assert_allclose(correlations, past_future_correlations([w], 3)[0], atol=1e-8)
+    assert complexity(with_zero, noisy=True).n == complexity(w, noisy=True).n == 2
+
+
 def test_ident_takes_m_and_ell_from_the_data_when_left_out() -> None:
     from ident import ident
     rng = np.random.default_rng(12)
