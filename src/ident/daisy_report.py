@@ -21,7 +21,7 @@ __all__ = ["mean_fits", "peer_mean", "shown", "flat_valleys", "markdown_table", 
            "load_results", "RUN_LOG"]
 
 
-# <<means over the sets>>= literate/19-daisy-runner.md:753
+# <<means over the sets>>= literate/19-daisy-runner.md:754
 def mean_fits(results: list[SetResult], start: str | None = None) -> dict[str, float]:
     """Mean validation fit per mode; with `start`, of the models that start alone gave (0 if it failed)."""
     means = {}
@@ -46,7 +46,7 @@ def peer_mean(results: list[SetResult]) -> float:
     return float(np.mean(values)) if values else float("nan")
 
 
-# <<the Markdown table>>= literate/19-daisy-runner.md:783
+# <<the Markdown table>>= literate/19-daisy-runner.md:784
 def _number(x, spec: str) -> str:
     return "-" if x is None or (isinstance(x, float) and not np.isfinite(x)) else format(x, spec)
 
@@ -105,7 +105,7 @@ def markdown_table(results: list[SetResult], stamp: str) -> str:
     return "\n".join(lines)
 
 
-# <<Figure 1: validation fits per set>>= literate/19-daisy-runner.md:843
+# <<Figure 1: validation fits per set>>= literate/19-daisy-runner.md:844
 def figure1(results: list[SetResult], path=None):
     """Bar chart of the validation fit per set and mode, with the best peer per set as a mark and the
     reference means as lines."""
@@ -141,7 +141,7 @@ def figure1(results: list[SetResult], path=None):
     return figure
 
 
-# <<write the results into a folder>>= literate/19-daisy-runner.md:884
+# <<write the results into a folder>>= literate/19-daisy-runner.md:885
 CSV_FIELDS = ("misfit", "start", "converged", "fit", "fit_overall", "fit_identification",
               "spectral_radius", "p_ell_condition", "account", "flat_valley")
 RUN_LOG = "run-log.json"  # the run's date, versions, iterations and seconds (not committed: see .gitignore)
@@ -239,7 +239,7 @@ def _write_tables(results: list[SetResult], paths: dict[str, Path], settings: di
     figure1(results, paths["figure"])
 
 
-# <<read the results back>>= literate/19-daisy-runner.md:988
+# <<read the results back>>= literate/19-daisy-runner.md:989
 def load_results(path) -> list[SetResult]:
     """The SetResults of a results.json written by write_results (numbers only: no models, and candidates
     without their Validation)."""
