@@ -57,8 +57,12 @@ def test_ident_with_a_record_equals_ident_with_the_keywords(noisy_data) -> None:
     by_record = ident(noisy_data, 1, 2, options=record)
     assert_same_identification(by_record, by_keywords)
     assert by_record[0].dt == 0.5
-    # a keyword equal to the record's value, or at its default, is no conflict
-    assert_same_identification(ident(noisy_data, 1, 2, tol=1e-7, exct=[0], options=record), by_keywords)
+    # a keyword equal to the record's value, or at its default, is no conflict; one the record leaves at its
+    # default fills it in
+    assert_same_identification(ident(noisy_data, 1, 2, tol=1e-7, exct=[0], maxiter=100, options=record), by_keywords)
+    partial = IdentOptions(**{**keywords, "exct": None})
+    assert_same_identification(ident(noisy_data, 1, 2, exct=[0], options=partial), by_keywords)
+    assert IdentOptions.merged(partial, exct=[0]) == record and IdentOptions.merged(record, exct=[0]) is record
 
 
 def test_the_record_reaches_every_start_whole(noisy_data, monkeypatch) -> None:
