@@ -234,7 +234,7 @@ def choose(attempts: list[Attempt]) -> Attempt:
     return next(a for a in preferred if a.result.misfit <= least + abs(least) * TIE_RTOL + np.finfo(float).tiny)
 
 
-# <<the solver's answers in the caller's terms>>= literate/13-identification.md:823
+# <<the solver's answers in the caller's terms>>= literate/13-identification.md:830
 P_ELL_ROUNDING = 64 * np.finfo(float).eps  # sigma_min(P_ell) of orthonormal rows: singular to rounding
 
 
