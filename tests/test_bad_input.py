@@ -1648,3 +1648,19 @@ OPTIONS_CASES = [
 @pytest.mark.parametrize("name, call, error, words", OPTIONS_CASES, ids=[c[0] for c in OPTIONS_CASES])
 def test_bad_options_records_are_refused_naming_the_field(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+from ident import daisy_runner as _daisy_runner  # noqa: E402
+
+DAISY_OPTIONS_CASES = [
+    ('daisy record and maxiter', lambda: _daisy_runner.run_set("dryer", maxiter=50, options=IdentOptions()), ValueError,
+     'options and maxiter=50 were both given: give the benchmark'),
+    ('daisy record with exct', lambda: _daisy_runner.run_set("dryer", options=IdentOptions(exct=[0])), ValueError,
+     r"options.exct is \(0,\): the benchmark's modes set the exact variables"),
+    ('daisy options not a record', lambda: _daisy_runner.run_benchmark(["dryer"], options={"tol": 1e-8}), TypeError,
+     'options must be an ident.IdentOptions record, got dict'),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", DAISY_OPTIONS_CASES, ids=[c[0] for c in DAISY_OPTIONS_CASES])
+def test_the_daisy_runner_refuses_a_record_given_twice(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

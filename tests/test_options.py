@@ -140,3 +140,5 @@ def test_the_daisy_runner_builds_one_record() -> None:
                                                            tol=daisy_runner.SETTINGS["tol"], refine=daisy_runner.REFINE)
     with pytest.raises(ValueError, match="maxiter must satisfy 0 <= maxiter, got -1"):
         daisy_runner.run_set("dryer", maxiter=-1)  # refused before any data are read
+    own = IdentOptions(init="arx", maxiter=20)
+    assert daisy_runner.benchmark_options(options=own) is own  # the caller's record, whole (its refine too)
