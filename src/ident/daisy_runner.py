@@ -18,7 +18,7 @@ from ident.batch import checked_executor
 from ident.daisy import dataset, load, table1
 from ident.executors import TasksInterrupted, portable, restored, run_tasks
 from ident.identification import IdentInfo, ident
-from ident.options import IdentOptions
+from ident.options import IdentOptions, same
 from ident.multistart import Candidate as IdentCandidate
 from ident.representations import kernel_to_ss, p_ell_condition
 from ident.solver.threads import one_blas_thread
@@ -49,8 +49,8 @@ def benchmark_options(init="auto", maxiter: int = SETTINGS["maxiter"], tol: floa
         return IdentOptions(init=init, maxiter=maxiter, tol=tol, refine=REFINE)
     if not isinstance(options, IdentOptions):
         raise TypeError(f"options must be an ident.IdentOptions record, got {type(options).__name__}")
-    given = [f"{name}={value!r}" for name, value, default in (("init", init, "auto"), ("maxiter", maxiter, SETTINGS[
-        "maxiter"]), ("tol", tol, SETTINGS["tol"])) if not (isinstance(value, type(default)) and value == default)]
+    keywords = {"init": (init, "auto"), "maxiter": (maxiter, SETTINGS["maxiter"]), "tol": (tol, SETTINGS["tol"])}
+    given = [f"{name}={value!r}" for name, (value, default) in keywords.items() if not same(value, default)]
     if given:
         raise ValueError(f"options and {given[0]} were both given: give the benchmark's settings in one place (the "
                          "keywords, or the record)")
