@@ -609,11 +609,11 @@ def misfit_vs_lag(w, m=None, lags=None, *, inputs=None, outputs=None, exct=None,
     if is_data_frame(validation):
         validation = validation_data(validation, w)  # its columns matched with w's by name
     validation_w = None if validation is None else checked_validation(validation, n_vars)[:, order]  # roles' order
-    options = {"inputs": inputs, "outputs": outputs, "offset": offset, "options": options}  # ident's, at every lag
-    points = run_tasks(lag_point, [(w, m, lag, validation_w, options) for lag in lags], executor, sizes=list(lags))
+    keywords = {"inputs": inputs, "outputs": outputs, "offset": offset, "options": options}  # ident's, at every lag
+    points = run_tasks(lag_point, [(w, m, lag, validation_w, keywords) for lag in lags], executor, sizes=list(lags))
     restarted = [False] * len(lags)
     if restart:
-        restarted = restart_local_minima(w, m, lags, points, validation_w, options)
+        restarted = restart_local_minima(w, m, lags, points, validation_w, keywords)
     return LagCurve(lags, np.array([x.misfit for x in points]), [x.iterations for x in points],
                     [x.seconds for x in points], np.array([x.fit for x in points]) if validation is not None else None,
                     [x.message for x in points], label, [x.converged for x in points], restarted)
