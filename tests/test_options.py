@@ -142,3 +142,22 @@ def test_the_daisy_runner_builds_one_record() -> None:
         daisy_runner.run_set("dryer", maxiter=-1)  # refused before any data are read
     own = IdentOptions(init="arx", maxiter=20)
     assert daisy_runner.benchmark_options(options=own) is own  # the caller's record, whole (its refine too)
+
+
+def test_the_command_line_builds_one_record(noisy_data, tmp_path, monkeypatch, capsys) -> None:
+    """identify gives ident one record built from its options, and none of the record's keywords besides."""
+    from ident import cli
+    path = tmp_path / "data.csv"
+    np.savetxt(path, noisy_data, delimiter=",", header="u,y", comments="")
+    given, real = {}, cli.ident
+
+    def recording(*args, **keywords):
+        given.update(keywords)
+        return real(*args, **keywords)
+
+    monkeypatch.setattr(cli, "ident", recording)
+    status = cli.main(["identify", str(path), "--inputs", "u", "--outputs", "y", "--lag", "2", "--exact", "inputs", "--init", "arx",
+                       "--maxiter", "50", "--tol", "1e-7", "--dt", "0.5"])
+    assert status == 0, capsys.readouterr().err
+    assert given["options"] == IdentOptions(exct=[0], init=("arx",), dt=0.5, maxiter=50, tol=1e-7)
+    assert not set(given) & {field.name for field in dataclasses.fields(IdentOptions)}
