@@ -58,8 +58,8 @@ def scaling_task(name: str, mode: str) -> float:
     """One run of a set in one mode (a job of the runner); its wall seconds where it ran."""
     info, split = daisy_runner.protocol_split(name, DATA, None, False)
     started = time.perf_counter()
-    daisy_runner.mode_run(name, mode, 0, split.identification, split.validation, info.m, info.ell, "auto",
-                          dict(daisy_runner.SETTINGS))
+    daisy_runner.mode_run(name, mode, 0, split.identification, split.validation, info.m, info.ell,
+                          daisy_runner.benchmark_options())
     return time.perf_counter() - started
 
 

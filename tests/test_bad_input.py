@@ -1621,3 +1621,71 @@ OPTIMISER_CASES = [
 @pytest.mark.parametrize("name, call, error, words", OPTIMISER_CASES, ids=[c[0] for c in OPTIMISER_CASES])
 def test_bad_optimisers_are_refused(name, call, error, words) -> None:
     test_bad_input_is_refused_clearly(name, call, error, words)
+
+
+# issue 28: the options record (ident.IdentOptions, 34-options.md) names the field, with ident's own words
+
+from ident import IdentOptions, choose_lag as _choose_lag, misfit_vs_lag as _misfit_vs_lag  # noqa: E402
+from ident.batch import Job  # noqa: E402
+from ident.solver import Settings  # noqa: E402
+
+OPTIONS_CASES = [
+    ('record maxiter negative', lambda: IdentOptions(maxiter=-1), ValueError, 'maxiter must satisfy 0 <= maxiter, got -1'),
+    ('record maxiter float', lambda: IdentOptions(maxiter=1.5), TypeError, 'maxiter must be an integer, got 1.5'),
+    ('record tol nan', lambda: IdentOptions(tol=float('nan')), ValueError, 'tol must be a finite positive number, got nan'),
+    ('record refine text', lambda: IdentOptions(refine="tight"), ValueError,
+     "refine must be a finite positive number, got 'tight'"),
+    ('record dt zero', lambda: IdentOptions(dt=0), ValueError, r'dt must be a finite positive number \(the sample time\), got 0'),
+    ('record dt text', lambda: IdentOptions(dt="0.1"), TypeError, r"dt must be a positive number \(the sample time\), got '0.1'"),
+    ('record n float', lambda: IdentOptions(n=1.5), TypeError, 'n must be an integer, got 1.5'),
+    ('record unknown init', lambda: IdentOptions(init="n4sid"), ValueError, "init: unknown start 'n4sid'"),
+    ('record empty init', lambda: IdentOptions(init=[]), ValueError, 'init is an empty sequence'),
+    ('record solver not settings', lambda: IdentOptions(solver=3), TypeError,
+     'solver must be an ident.solver.Settings or a mapping of its fields to values, got int'),
+    ('record solver unknown field', lambda: IdentOptions(solver={"damping": 1.0}), ValueError,
+     "solver: 'damping' is not a setting of the optimiser; its settings are secant, gradient_zero"),
+    ('record solver maxiter', lambda: IdentOptions(solver={"maxiter": 5}), ValueError,
+     r'solver: maxiter is a field of the record itself; give maxiter=\.\.\. to IdentOptions'),
+    ('record solver Settings with tol', lambda: IdentOptions(solver=Settings(tol=1e-3)), ValueError,
+     'solver: tol is a field of the record itself'),
+    ('record solver negative constant', lambda: IdentOptions(solver={"mu": -3.0}), ValueError,
+     'solver: mu must be a finite positive number, got -3.0'),
+    ('record solver flag', lambda: IdentOptions(solver={"secant": 1}), TypeError, 'solver: secant must be True or False, got 1'),
+    ('record solver count', lambda: IdentOptions(solver={"polish_steps": 2.5}), TypeError,
+     'solver: polish_steps must be an integer, got 2.5'),
+    ('ident options not a record', lambda: ident(W, 1, 1, options={"tol": 1e-8}), TypeError,
+     'options must be an ident.IdentOptions record, got dict'),
+    ('ident options and a keyword', lambda: ident(W, 1, 1, tol=1e-6, options=IdentOptions(tol=1e-8)), ValueError,
+     r'options and tol=1e-06 were both given, and options.tol is 1e-08: give tol in one place'),
+    ('ident options and init', lambda: ident(W, 1, 1, init="arx", options=IdentOptions(init="lra")), ValueError,
+     "options and init='arx' were both given, and options.init is 'lra'"),
+    ('ident options and exct', lambda: ident(W, 1, 1, exct=[0], options=IdentOptions(exct=[1])), ValueError,
+     r'options and exct=\[0\] were both given, and options.exct is \(1,\)'),
+    ('choose_lag options and maxiter', lambda: _choose_lag(W, 1, [1, 2], maxiter=5, options=IdentOptions(maxiter=7)),
+     ValueError, 'options and maxiter=5 were both given, and options.maxiter is 7'),
+    ('misfit_vs_lag options with an order', lambda: _misfit_vs_lag(W, 1, [1, 2], options=IdentOptions(n=1)), ValueError,
+     'options.n = 1: an order belongs to one lag'),
+    ('job options of another kind', lambda: Job(W, 1, 1, options=[("tol", 1e-8)]), TypeError,
+     "options must be a mapping of ident's keyword options to values or an IdentOptions, got list"),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", OPTIONS_CASES, ids=[c[0] for c in OPTIONS_CASES])
+def test_bad_options_records_are_refused_naming_the_field(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)
+
+from ident import daisy_runner as _daisy_runner  # noqa: E402
+
+DAISY_OPTIONS_CASES = [
+    ('daisy record and maxiter', lambda: _daisy_runner.run_set("dryer", maxiter=50, options=IdentOptions()), ValueError,
+     'options and maxiter=50 were both given: give the benchmark'),
+    ('daisy record with exct', lambda: _daisy_runner.run_set("dryer", options=IdentOptions(exct=[0])), ValueError,
+     r"options.exct is \(0,\): the benchmark's modes set the exact variables"),
+    ('daisy options not a record', lambda: _daisy_runner.run_benchmark(["dryer"], options={"tol": 1e-8}), TypeError,
+     'options must be an ident.IdentOptions record, got dict'),
+]
+
+
+@pytest.mark.parametrize("name, call, error, words", DAISY_OPTIONS_CASES, ids=[c[0] for c in DAISY_OPTIONS_CASES])
+def test_the_daisy_runner_refuses_a_record_given_twice(name, call, error, words) -> None:
+    test_bad_input_is_refused_clearly(name, call, error, words)

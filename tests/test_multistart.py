@@ -8,7 +8,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from ident import cli, ident, multistart, starts
+from ident import IdentOptions, cli, ident, multistart, starts
 from ident.representations import random_system, simulate
 
 
@@ -24,7 +24,7 @@ def noisy_data() -> np.ndarray:
 def test_the_start_task_is_a_frozen_record() -> None:
     fields = [field.name for field in dataclasses.fields(multistart.StartTask)]
     assert fields[:7] == ["problem", "rank", "m", "ell", "exact", "exponent", "options"]
-    task = multistart.StartTask(None, 3, 1, 1, (), 0, {})
+    task = multistart.StartTask(None, 3, 1, 1, (), 0, IdentOptions())
     with pytest.raises(dataclasses.FrozenInstanceError):
         task.rank = 4
 
@@ -80,7 +80,7 @@ def test_run_start_takes_a_start_to_the_candidate_ident_reports(noisy_data) -> N
     exponent = scale_exponent([noisy_data])
     problem = identification_problem(scaled([noisy_data], -exponent), 2, (), [None])
     task = multistart.StartTask(problem, identification_rank([noisy_data], [None], 1, 2), 1, 2, (), exponent,
-                                {"maxiter": 100, "tol": 1e-5, "disp": "off"})
+                                IdentOptions(maxiter=100, tol=1e-5))
     attempt = multistart.run_start("arx", task)
     assert attempt.candidate.start == "arx" and not attempt.candidate.error
     assert attempt.candidate.misfit == pytest.approx(info.M, rel=1e-12)

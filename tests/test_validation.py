@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import warnings_as_errors
-from ident import misfit
+from ident import IdentOptions, misfit
 from ident.representations import make_ss, p_ell_condition, random_system, simulate
 from ident.validation import (LagChoice, LagCurve, choose_lag, fit_percent, misfit_vs_lag, plot_lag_curves,
                               spectral_radius, split_for_validation, validate)
@@ -279,7 +279,7 @@ def test_the_lag_plot_marks_several_lags_and_circles_restarts():
 
 def test_a_restart_from_a_smaller_lag_never_ends_above_it():
     w = lag2_data()
-    options = dict(exct=None, wini=None, init="auto", maxiter=100, tol=1e-5, refine=None, dt=None)
+    options = {"options": IdentOptions()}  # ident's keywords as misfit_vs_lag passes them: the record whole
     points = [lag_point(w, 1, lag, None, options) for lag in (1, 3)]
     points[1].misfit = 1e6 * points[0].misfit  # as if the solver had stopped in a poor local minimum
     restarted = restart_local_minima(w, 1, [1, 3], points, None, options)

@@ -16,6 +16,7 @@ from ident.hankel import block_hankel, mosaic_hankel, time_major_permutation
 from ident.identification import IdentInfo, UnstableModelWarning, ident
 from ident.model_misfit import misfit
 from ident.model_file import load_model, save_model
+from ident.options import IdentOptions
 from ident.order_choice import OrderChoice, choose_order
 from ident.reduced import Reduction
 from ident.reduction import balanced_truncation
@@ -28,7 +29,7 @@ from ident.uncertainty import Uncertainty, UncertaintyWarning
 from ident.validation import LagChoice, choose_lag, compare, fit_percent, misfit_vs_lag, resid, validate
 
 __all__ = [
-    "ident", "misfit", "IdentInfo", "Offset", "Reduction", "compare", "resid", "validate", "fit_percent",
+    "ident", "misfit", "IdentInfo", "IdentOptions", "Offset", "Reduction", "compare", "resid", "validate", "fit_percent",
     "misfit_vs_lag", "choose_lag", "LagChoice", "load_model", "save_model", "balanced_truncation", "kernel_misfit", "Structure",
     "SLRAWarning", "Status",
     "MisfitWarning",

@@ -14,7 +14,7 @@ from ident.frames import (Spacing, as_frames, column_positions, frame_series, is
 from ident.representations import is_state_space
 
 __all__ = ["DataForm", "as_series", "as_array", "restore_form", "with_roles", "in_variable_order", "checked_inputs_count", "series_label", "checked_series",
-           "real_array", "holds_real_numbers", "checked_integer", "checked_exact", "checked_initial", "checked_options",
+           "real_array", "holds_real_numbers", "checked_integer", "checked_exact", "checked_initial", "checked_disp",
            "checked_tolerance", "Offset", "checked_offset", "checked_sample_time", "checked_order"]
 
 
@@ -379,12 +379,11 @@ def checked_initial(wini, ell: int, n_vars: int, n_series: int) -> list[np.ndarr
 
 
 # <<check solver options>>= literate/13-identification.md:547
-def checked_options(maxiter, tol, disp) -> tuple[int, float, str]:
-    maxiter = checked_integer("maxiter", maxiter, 0)
-    tol = checked_tolerance("tol", tol)
+def checked_disp(disp) -> str:
+    """What the solver prints (maxiter, tol and refine are checked by ident.options.IdentOptions)."""
     if disp not in ("off", "iter", "final", "notify"):
         raise ValueError(f"disp must be one of 'off', 'iter', 'final', 'notify'; got {disp!r}")
-    return maxiter, tol, disp
+    return disp
 
 
 def checked_tolerance(name: str, value) -> float:

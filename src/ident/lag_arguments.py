@@ -8,11 +8,10 @@ import math
 
 import numpy as np
 
-from ident.data_forms import (as_series, checked_exact, checked_initial, checked_inputs_count, checked_options,
-                              checked_sample_time, checked_series, checked_tolerance, with_roles)
+from ident.data_forms import (as_series, checked_exact, checked_initial, checked_inputs_count, checked_sample_time,
+                              checked_series, with_roles)
 from ident.affine import checked_affine
 from ident.frames import is_data_frame
-from ident.multistart import checked_init
 from ident.problem import check_inputs_present, identification_rank
 
 __all__ = ["checked_lags", "checked_curve_arguments", "checked_validation", "lag_refusal", "CHOOSE_LAG_HOLDOUT"]
@@ -20,7 +19,7 @@ __all__ = ["checked_lags", "checked_curve_arguments", "checked_validation", "lag
 CHOOSE_LAG_HOLDOUT = 0.3  # choose_lag's default: the last 30 % of w judges each lag
 
 
-# <<checks of the lag functions' arguments>>= literate/17-validation.md:1215
+# <<checks of the lag functions' arguments>>= literate/17-validation.md:1217
 def checked_lags(lags, lowest: int = 1) -> list[int]:
     """The lags as ints >= lowest, in the order given; a clear error naming `lags` otherwise. Every
     entry must be an integer, Python's or numpy's: 2.5, 2.0, '2', True and numpy floats are refused
@@ -48,25 +47,23 @@ def is_lag(value, lowest: int) -> bool:
     return is_integer(value) and value >= lowest
 
 
-def checked_curve_arguments(w, m: int, lags: list[int], exct, wini, init, maxiter: int, tol: float,
-                            label: str, inputs=None, outputs=None, refine=None, dt=None,
+def checked_curve_arguments(w, m: int, lags: list[int], options, label: str, inputs=None, outputs=None,
                             offset=False) -> tuple[int, int, list[int]]:
     """Check once, before any identification, what does not depend on the lag (and wini, for every
-    lag): bad input is an error naming the argument, not a curve of NaN. Returns q, m (implied by inputs
-    and outputs if they are given) and the caller's positions of the variables in the roles' order."""
+    lag): bad input is an error naming the argument, not a curve of NaN; `options`, an IdentOptions, was
+    checked when it was built, and here against the data. Returns q, m (implied by inputs and outputs if
+    they are given) and the caller's positions of the variables in the roles' order."""
     series, form = as_series(w, missing=True)  # NaN: missing samples, which ident takes
     series, form, m = with_roles(series, form, inputs, outputs, m)  # the variables in the caller's roles
     n_vars = series[0].shape[1]
     m = checked_inputs_count(m, n_vars)
-    checked_exact(form.positions(exct), n_vars, m)
-    checked_options(maxiter, tol, "off")
-    if refine is not None:
-        checked_tolerance("refine", refine)
-    checked_sample_time(dt, None, form.spacing)  # a dt that contradicts w's time index, too
-    checked_init(init, None)
-    checked_affine(offset, wini)
+    checked_exact(form.positions(options.exct), n_vars, m)
+    if options.n is not None:
+        raise ValueError(f"options.n = {options.n}: an order belongs to one lag, and the lag functions take none")
+    checked_sample_time(options.dt, None, form.spacing)  # a dt that contradicts w's time index, too
+    checked_affine(offset, options.wini)
     for lag in dict.fromkeys(lags):
-        checked_initial(wini, lag, n_vars, len(series))
+        checked_initial(options.wini, lag, n_vars, len(series))
     check_inputs_present(series, m)
     if not isinstance(label, str):
         raise TypeError(f"label must be a str (the curve's name in plots), got {type(label).__name__}")

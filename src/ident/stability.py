@@ -179,7 +179,7 @@ def in_chart(kernel) -> np.ndarray:
 
 
 def stable_choice(chosen, attempts, problem, m: int, ell: int, exponent: int, *, stable: bool, margin: float,
-                  options: dict, holdout):
+                  options, holdout):
     """(attempt, Stability or None): the chosen attempt, or the constrained fit in its place (see the
     text); holdout(kernels) gives the held-out fits of {"unconstrained": R, "constrained": R}."""
     fallback = not stable and len(attempts) > 1 and not chosen.candidate.stable
@@ -193,7 +193,7 @@ def stable_choice(chosen, attempts, problem, m: int, ell: int, exponent: int, *,
     identification, problem, fits = problem, Problem(problem.parameters, problem.structure), {}  # and the solver's view
     for name, start in constrained_starts(chosen, attempts, m, ell, bound):
         try:
-            fit = constrained_fit(problem, start(), m, ell, bound, options["maxiter"], options["tol"])
+            fit = constrained_fit(problem, start(), m, ell, bound, options.maxiter, options.tol)
         except (InfeasibleKernelError, IllConditionedKernelError, np.linalg.LinAlgError):
             continue
         if np.isfinite(p_ell_condition(fit[0], m, ell)):  # a fit that ran off to a kernel with no model is no answer
@@ -249,7 +249,7 @@ def constrained_attempt(chosen, problem, kernel, state, iterations: int, converg
 
 
 def holdout_fits(kernels: dict, series, initial, make_problem, rank: int, m: int, ell: int, margin: float,
-                 options: dict) -> dict | None:
+                 options) -> dict | None:
     """Both models fitted again on the first 1 - HOLDOUT_SHARE of every series, and their simulation
     fits (%) on the rest; None when the series are too short to split."""
     cuts = [int(round((1 - HOLDOUT_SHARE) * len(w))) for w in series]
@@ -259,9 +259,9 @@ def holdout_fits(kernels: dict, series, initial, make_problem, rank: int, m: int
     try:
         fitting = make_problem([w[:cut] for w, cut in zip(series, cuts)], initial)
         unconstrained = slra(fitting.parameters, fitting.structure, rank, R0=kernels["unconstrained"], warn=False,
-                             maxiter=options["maxiter"], tol=options["tol"]).R
-        constrained = constrained_fit(Problem(fitting.parameters, fitting.structure), kernels["constrained"], m, ell, 1 - margin, options["maxiter"],
-                                      options["tol"])[0]
+                             maxiter=options.maxiter, tol=options.tol).R
+        constrained = constrained_fit(Problem(fitting.parameters, fitting.structure), kernels["constrained"], m, ell, 1 - margin, options.maxiter,
+                                      options.tol)[0]
     except (ValueError, InfeasibleKernelError, IllConditionedKernelError, np.linalg.LinAlgError):
         return None
     return {name: simulation_fit(normalised(kernel), m, ell, held)
