@@ -156,6 +156,7 @@ def test_the_command_line_builds_one_record(noisy_data, tmp_path, monkeypatch, c
         return real(*args, **keywords)
 
     monkeypatch.setattr(cli, "ident", recording)
+    monkeypatch.chdir(tmp_path)  # identify writes its model file beside the working directory's name for the data
     status = cli.main(["identify", str(path), "--inputs", "u", "--outputs", "y", "--lag", "2", "--exact", "inputs", "--init", "arx",
                        "--maxiter", "50", "--tol", "1e-7", "--dt", "0.5"])
     assert status == 0, capsys.readouterr().err
