@@ -13,6 +13,7 @@ import io
 import json
 import re
 import shutil
+import signal
 import socket
 import sys
 import time
@@ -519,36 +520,37 @@ def test_a_large_wrong_local_file_is_refused_without_reading_it_into_memory(no_e
 
 
 class _InProcess:
-    """An executor that runs each of ident's starts here at once, as the runner hands them on; `special` maps
-    (set, mode) to an exception that submit raises (Dask pickles in submit), an exception the start's future
-    holds (a worker lost), or "pending". A start's set is known by its number of variables (`names` maps
-    them to the set), its mode by its exact variables."""
+    """An executor that runs each job here at once; `special` maps (set, mode) to an exception that submit
+    raises (Dask pickles in submit), an exception the job's future holds (a worker lost), "pending", or
+    "interrupt" (Ctrl-C while its result is awaited)."""
 
-    def __init__(self, special, names):
-        self.special, self.names, self.futures = special, names, {}
+    def __init__(self, special):
+        self.special, self.futures = special, {}
 
-    def submit(self, function, start, task):
-        key = (self.names[task.problem.structure.n_vars], "oe" if task.exact else "eiv")
-        what = self.special.get(key)
+    def submit(self, function, name, mode, *args):
+        what = self.special.get((name, mode))
         if isinstance(what, TypeError):
             raise what
-        future = concurrent.futures.Future()
+        future = _Interrupting() if what == "interrupt" else concurrent.futures.Future()
         if isinstance(what, Exception):
             future.set_exception(what)
         elif what is None:
-            future.set_result(function(start, task))
-        self.futures.setdefault(key, []).append(future)
+            future.set_result(function(name, mode, *args))
+        self.futures[name, mode] = future
         return future
 
 
-NAMES = {7: "erie", 8: "destill"}  # their numbers of variables
+class _Interrupting(concurrent.futures.Future):
+    def result(self, timeout=None):
+        signal.raise_signal(signal.SIGINT)  # Python's handler raises KeyboardInterrupt here, as on Ctrl-C
+        raise AssertionError("SIGINT did not interrupt")
 
 
 def test_what_the_executor_cannot_do_fails_that_mode_alone(shared):
     special = {("erie", "eiv"): TypeError("Could not serialize object of type Task"),
                ("destill", "oe"): OSError("the worker died 3 times on this task")}
     results = daisy_runner.run_benchmark(["erie", "destill"], directory=shared, download_missing=False,
-                                         progress=None, executor=_InProcess(special, NAMES))
+                                         progress=None, executor=_InProcess(special))
     erie, destill = results
     assert erie.modes["oe"].model is not None and destill.modes["eiv"].model is not None
     assert erie.modes["eiv"].model is None and erie.modes["eiv"].fit == 0
@@ -558,26 +560,15 @@ def test_what_the_executor_cannot_do_fails_that_mode_alone(shared):
 
 
 def test_ctrl_c_keeps_the_finished_sets(shared, monkeypatch):
-    # on an executor: erie finished in both modes; Ctrl-C reaches the main thread as it combines destill's
-    # errors-in-variables runs, while destill's output-error starts are still pending: they are cancelled
-    executor = _InProcess({("destill", "oe"): "pending"}, NAMES)
-    mode_result = daisy_runner.mode_result
-
-    def interrupted(mode, runs, *args):
-        if runs[0].identified is not None and runs[0].identified.info.Rh.shape[1] == 2 * 8:  # destill: 8 variables, lag 1
-            raise KeyboardInterrupt
-        return mode_result(mode, runs, *args)
-
-    monkeypatch.setattr(daisy_runner, "mode_result", interrupted)
+    # on an executor: erie finished in both modes (destill, submitted first, is interrupted while awaited)
+    executor = _InProcess({("destill", "eiv"): "interrupt", ("destill", "oe"): "pending"})
     with pytest.raises(daisy_runner.BenchmarkInterrupted, match="interrupted with 1 of 2 sets finished") as caught:
         daisy_runner.run_benchmark(["erie", "destill"], directory=shared, download_missing=False, progress=None,
                                    executor=executor, modes=["eiv", "oe"])
-    monkeypatch.setattr(daisy_runner, "mode_result", mode_result)
     assert isinstance(caught.value, KeyboardInterrupt)
     assert [r.name for r in caught.value.results] == ["erie"]
     assert all(x.model is not None for x in caught.value.results[0].modes.values())
-    pending = executor.futures["destill", "oe"]
-    assert pending and all(future.cancelled() for future in pending)  # not left running
+    assert executor.futures["destill", "oe"].cancelled()  # not left running
     # serially: the second set is interrupted
     run_set = daisy_runner.run_set
 

@@ -13,15 +13,13 @@ import concurrent.futures
 import io
 import pickle
 import signal
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from ident import Job, ident, run_jobs
-from ident.executors import (SUBMITTED, StateSpaceMatrices, TasksInterrupted, portable, restored, run_tasks,
-                             run_tasks_handing_on)
+from ident.executors import SUBMITTED, StateSpaceMatrices, TasksInterrupted, portable, restored, run_tasks
 from ident.representations import is_state_space, make_ss, random_system, simulate
 
 
@@ -140,42 +138,6 @@ def test_ctrl_c_in_a_serial_run_keeps_the_finished_tasks() -> None:
     assert caught.value.finished == {0: 1.0, 1: 4.0} and caught.value.total == 4
 
 
-def sum_of_squares(values, parts) -> float:
-    """A task of several parts: each value squared through `parts`, the squares added here."""
-    return sum(future.result() for future in [parts.submit(square, x) for x in values])
-
-
-TASKS_OF_PARTS = [((1.0, 2.0),), ((3.0,),), ((4.0, 5.0),)]
-
-
-def test_tasks_run_here_and_hand_their_parts_to_the_executor() -> None:
-    executor = Recording()
-    assert run_tasks_handing_on(sum_of_squares, TASKS_OF_PARTS, executor, sizes=[2, 1, 2]) == [5.0, 9.0, 41.0]
-    assert sorted(executor.order) == [1.0, 2.0, 3.0, 4.0, 5.0]  # every part, and only the parts, went there
-
-
-def test_a_part_the_executor_cannot_run_fails_its_task_alone() -> None:
-    executor = Recording({2.0: TypeError("cannot pickle"), 4.0: ("future", OSError("worker lost"))})
-    results = run_tasks_handing_on(sum_of_squares, TASKS_OF_PARTS, executor,
-                                   failed=lambda error, when: type(error).__name__)
-    assert results == ["TypeError", 9.0, "OSError"]
-
-
-def test_ctrl_c_cancels_the_parts_not_yet_finished() -> None:
-    executor = Recording({5.0: "pending"})
-
-    def interrupted_after_the_second(k, result):
-        while 5.0 not in executor.futures:  # the third task is waiting for its pending part
-            time.sleep(0.001)
-        if k == 1:
-            raise KeyboardInterrupt
-
-    with pytest.raises(TasksInterrupted, match="2 of 3 tasks finished") as caught:
-        run_tasks_handing_on(sum_of_squares, TASKS_OF_PARTS, executor, done=interrupted_after_the_second)
-    assert caught.value.finished == {0: 5.0, 1: 9.0}
-    assert executor.futures[5.0].cancelled()
-
-
 def test_a_model_travels_as_its_matrices_and_comes_back_whole() -> None:
     system = make_ss(np.array([[0.5]]), np.array([[1.0]]), np.array([[2.0]]), np.array([[0.0]]), dt=0.1,
                      inputs=["u"], outputs=["y"])
@@ -222,16 +184,15 @@ def test_idents_candidates_and_the_lag_sweep_send_no_state_space() -> None:
     assert sweep.calls >= 2 and there.ell == choose_lag(w, 1, [1, 2], exct=[0]).ell
 
 
-def test_the_daisy_runner_sends_no_state_space_one_job_per_start_of_each_run() -> None:
+def test_the_daisy_runner_sends_no_state_space_one_job_per_set_mode_and_replay() -> None:
     from ident import daisy_runner
-    from ident.starts import AUTO_STARTS
     folder = Path(__file__).resolve().parents[2] / "shared" / "daisy"
     if not (folder / "erie.dat").is_file():
         pytest.skip(f"the DAISY files are not in {folder}")
     executor = Pickling()
     remote = daisy_runner.run_benchmark(["erie"], directory=folder, download_missing=False, modes=["oe"],
                                         progress=None, executor=executor)
-    assert executor.calls == (daisy_runner.REPLAYS + 1) * len(AUTO_STARTS)  # the runs themselves run here
+    assert executor.calls == daisy_runner.REPLAYS + 1
     serial = daisy_runner.run_benchmark(["erie"], directory=folder, download_missing=False, modes=["oe"],
                                         progress=None)
     there, here = remote[0].modes["oe"], serial[0].modes["oe"]
