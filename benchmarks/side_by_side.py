@@ -18,6 +18,8 @@ Cases:
                     maxiter 500): seconds of ident summed over the 17 sets (python-control imported
                     before), the solver's own seconds (solver_seconds), iterations
     daisy:SET       one set of it
+    daisy-plain     the same without the runner's refinement to 1e-12 (ident.daisy_runner.REFINE = None where the
+                    version has it): both versions then stop at the runner's tol 1e-5, the same work
     peak            the matrix product alone
 
 Usage: python benchmarks/side_by_side.py OLD_ROOT [NEW_ROOT] [--rounds=3] [--json=FILE] CASE ...
@@ -194,9 +196,12 @@ def case_short(n_series, n_samples):
             "misfit": info.M}
 
 
-def case_daisy(names=None):
+def case_daisy(names=None, refine=True):
     try:
         from ident.daisy_runner import run_set
+        from ident import daisy_runner
+        if not refine and hasattr(daisy_runner, "REFINE"):
+            daisy_runner.REFINE = None  # benchmark_options reads it at each call
     except ImportError:
         from ident.daisy import run_set
     from ident import daisy as daisy_sets
@@ -247,6 +252,8 @@ def worker(case):
         result = case_short(n_series, n_samples)
     elif kind == "daisy":
         result = case_daisy([argument] if argument else None)
+    elif kind == "daisy-plain":
+        result = case_daisy([argument] if argument else None, refine=False)
     elif kind == "peak":
         result = {}
     else:
