@@ -7,7 +7,7 @@ import pytest
 
 import ident.smoothing as smoothing
 from ident import misfit
-from ident.banded_misfit import BANDED_FROM, banded_solution, gap_kernel
+from ident.banded_misfit import BANDED_FROM, banded_solution, gap_kernel, gram_solution
 from ident.incomplete import in_chart, sparse_solution
 from ident.representations import make_ss, random_system, simulate, ss_to_kernel
 from ident.smoothing import smoothed_misfit
@@ -201,3 +201,51 @@ def test_kernel_solution_falls_back_to_the_sparse_system_on_a_zero_pivot(monkeyp
     found = kernel_solution(kernel, values, weights, jacobian=True)
     assert np.abs(found.residuals - expected.residuals).max() <= 1e-14 * np.abs(expected.residuals).max()
     assert np.abs(found.jacobian - expected.jacobian).max() <= 1e-14 * np.abs(expected.jacobian).max()
+
+
+@pytest.mark.parametrize("m, p, ell, kind, seed", [(2, 2, 2, "random", 20), (1, 2, 2, "bursts", 21), (2, 1, 4, "bursts", 22),
+                                                   (2, 2, 2, "outputs", 23)])
+def test_the_gram_matrix_corrected_solves_the_saddle_point_system(m, p, ell, kind, seed) -> None:
+    """The corrections reach the exact system's answer, not the biased one of the weight rho: the same
+    residuals and wh as the banded LU, to rounding."""
+    model, w, rng = noisy_series(m, p, ell, 3000, 0.1, seed)
+    gaps = gap_pattern(w.shape, kind, rng)
+    values, weights = np.where(gaps, 0.0, w), np.where(gaps, 0.0, rng.uniform(0.5, 2.0, w.shape))
+    kernel = gap_kernel(*(np.asarray(getattr(model, x), dtype=float) for x in "ABCD"))[0]
+    found, expected = gram_solution(kernel, values, weights), banded_solution(kernel, values, weights)
+    assert found is not None and found.settled and expected.settled
+    M, M_expected = np.sum(found.residuals ** 2), np.sum(expected.residuals ** 2)
+    assert abs(M - M_expected) <= 1e-12 * M_expected
+    assert np.abs(found.approximation - expected.approximation).max() <= 1e-10 * np.abs(w).max()
+
+
+def test_the_gram_matrix_gives_way_where_the_gaps_are_barely_determined(banded_answers) -> None:
+    """Half of all values missing: the corrections do not contract (nor do the LU's ridge solves), and
+    the smoother answers, as before the Gram road; an exact value is left to the LU too."""
+    model, w, rng = noisy_series(2, 2, 2, BANDED_FROM, 0.1, 11)
+    gappy = np.where(rng.random(w.shape) < 0.5, np.nan, w)
+    A, B, C, D = (np.asarray(getattr(model, x), dtype=float) for x in "ABCD")
+    kernel = gap_kernel(A, B, C, D)[0]
+    assert gram_solution(kernel, np.nan_to_num(gappy), np.where(np.isnan(gappy), 0.0, 1.0)) is None
+    M, _, _ = misfit(gappy, model)
+    assert banded_answers == [False]
+    assert abs(M - smoothed_misfit(A, B, C, D, [gappy], banded=False).misfit) <= 1e-12 * M
+    weights = np.where(np.isnan(gappy), 0.0, 1.0)
+    weights[0, 0] = np.inf
+    assert gram_solution(kernel, np.nan_to_num(gappy), weights) is None
+
+
+def test_the_gram_matrix_answers_where_the_ridge_did_not_settle(banded_answers) -> None:
+    """A fifth of the values missing: some gaps are determined only weakly, the LU's four ridge solves
+    do not settle, the corrections do; the misfit is the smoother's and the sparse system's."""
+    model, w, rng = noisy_series(2, 2, 2, 5000, 0.1, 30)
+    gappy = np.where(rng.random(w.shape) < 0.2, np.nan, w)
+    A, B, C, D = (np.asarray(getattr(model, x), dtype=float) for x in "ABCD")
+    kernel, values, weights = gap_kernel(A, B, C, D)[0], np.nan_to_num(gappy), np.where(np.isnan(gappy), 0.0, 1.0)
+    found = gram_solution(kernel, values, weights)
+    assert found is not None and found.settled and not banded_solution(kernel, values, weights).settled
+    M, wh, _ = misfit(gappy, model)
+    assert banded_answers == [True]
+    sparse = sparse_solution(in_chart(ss_to_kernel(model, 2)), values, weights)
+    assert abs(M - np.sum(sparse.residuals ** 2)) <= 1e-10 * M
+    assert abs(M - smoothed_misfit(A, B, C, D, [gappy], banded=False).misfit) <= 1e-8 * M
